@@ -1,0 +1,42 @@
+//! `mocu`: the command-line OCU. The command-line contract (docs/language.md, end) is fixed:
+//! commands, flags, exit codes and output formats are relied on by scripts and CI.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+mod build;
+mod check;
+mod run;
+
+#[derive(Parser)]
+#[command(name = "mocu", version, about = "Multi-robot Operator Control Unit")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Lint layout files, folders or profiles.
+    Check(check::CheckArgs),
+    /// Compile a project profile into one validated bundle.
+    Build(build::BuildArgs),
+    /// Run the OCU on a layout, a profile or a bundle.
+    Run(run::RunArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match cli.command {
+        Command::Check(args) => check::main(args),
+        Command::Build(args) => build::main(args),
+        Command::Run(args) => run::main(args),
+    }
+}
