@@ -1,1 +1,35 @@
-//! x
+//! The DataServer: Mocu's shared-world model (MOCU 3 paper §4).
+//!
+//! An object tree under one root; typed properties with metadata; subscriptions to an
+//! object's properties or children with initial values, coalescing and delta isolation;
+//! methods with call feedback, queued and delayed calls; streams through listener objects;
+//! dotted-path subscriptions that follow system discovery.
+//!
+//! Architecture invariant: this crate does no I/O and knows nothing of the compiler, the
+//! renderer, input devices or file watching. Writes run on the caller's thread;
+//! notification work runs on the DataServer's own workers.
+
+mod error;
+mod executor;
+mod hash;
+mod meta;
+mod method;
+mod notification;
+mod object;
+mod path;
+mod server;
+mod snapshot;
+mod stream;
+mod subscription;
+
+pub use error::{DsError, ObjRef};
+pub use executor::{Executor, Stats};
+pub use meta::{ObjectInfo, PropMeta};
+pub use method::{Call, CallMode, CallOptions, CallOutcome, MethodSpec, ParamSpec, Responder};
+pub use mocu_value::{Guid, PropName, Value, ValueKind};
+pub use notification::{Kind, Notification, Subject};
+pub use path::{DottedPath, PathEvent, PathWatch};
+pub use server::{Config, DataServer};
+pub use snapshot::Snapshot;
+pub use stream::{LISTENER_TYPE, Overflow, RECEIVER_TYPE};
+pub use subscription::{SubscriptionId, Topic};

@@ -6,7 +6,9 @@ use std::num::NonZeroU64;
 ///
 /// # Guarantees
 /// Never zero, so `Option<Guid>` is eight bytes. `Guid::ROOT` is the root object's id.
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, serde::Serialize, serde::Deserialize,
+)]
 #[serde(transparent)]
 pub struct Guid(NonZeroU64);
 

@@ -11,6 +11,7 @@ pub enum ValueKind {
     Guid,
     List,
     Set,
+    Bytes,
 }
 
 impl ValueKind {
@@ -23,6 +24,7 @@ impl ValueKind {
             ValueKind::Guid => "guid",
             ValueKind::List => "list",
             ValueKind::Set => "set",
+            ValueKind::Bytes => "bytes",
         }
     }
 
@@ -35,6 +37,7 @@ impl ValueKind {
             "guid" => ValueKind::Guid,
             "list" => ValueKind::List,
             "set" => ValueKind::Set,
+            "bytes" => ValueKind::Bytes,
             _ => return None,
         })
     }

@@ -19,6 +19,8 @@ pub enum Value {
     Guid(Guid),
     List(Arc<[Value]>),
     Set(Arc<[Value]>),
+    /// Opaque bytes (encoded video, raw payloads): shared, never copied on clone.
+    Bytes(Arc<[u8]>),
 }
 
 impl Value {
@@ -31,6 +33,7 @@ impl Value {
             Value::Guid(_) => ValueKind::Guid,
             Value::List(_) => ValueKind::List,
             Value::Set(_) => ValueKind::Set,
+            Value::Bytes(_) => ValueKind::Bytes,
         }
     }
 
@@ -103,6 +106,7 @@ impl Value {
             Value::Guid(_) => 4,
             Value::List(_) => 5,
             Value::Set(_) => 6,
+            Value::Bytes(_) => 7,
         }
     }
 
@@ -123,6 +127,7 @@ impl Value {
                 }
                 a.len().cmp(&b.len())
             }
+            (Value::Bytes(a), Value::Bytes(b)) => a.cmp(b),
             _ => self.rank().cmp(&other.rank()),
         }
     }
@@ -159,6 +164,7 @@ pub mod serde_json_free {
                     }
                     f.write_str("]")
                 }
+                Value::Bytes(b) => write!(f, "{{\"bytes\":{}}}", b.len()),
             }
         }
     }
@@ -207,6 +213,7 @@ impl fmt::Debug for Value {
             Value::Guid(g) => write!(f, "{g:?}"),
             Value::List(l) => f.debug_list().entries(l.iter()).finish(),
             Value::Set(l) => f.debug_set().entries(l.iter()).finish(),
+            Value::Bytes(b) => write!(f, "<{} bytes>", b.len()),
         }
     }
 }
@@ -267,6 +274,7 @@ impl serde::Serialize for Value {
                 }
                 seq.end()
             }
+            Value::Bytes(b) => s.serialize_bytes(b),
         }
     }
 }

@@ -1,0 +1,434 @@
+//! Methods on objects: the paper's answer to control feedback (§3.2). A call is Accepted,
+//! Refused with the module's reason, Failed, TimedOut, or finds no such object or method.
+
+use crate::error::{DsError, ObjRef};
+use crate::executor::{Executor, Target};
+use crate::server::{DataServer, obj_ref_of};
+use mocu_value::{Guid, PropName, Value, ValueKind};
+use parking_lot::Mutex;
+use std::fmt;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// One parameter (or result) of a method.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ParamSpec {
+    pub name: Arc<str>,
+    /// `None`: any value.
+    pub kind: Option<ValueKind>,
+    pub units: Option<Arc<str>>,
+}
+
+impl ParamSpec {
+    pub fn new(name: &str, kind: ValueKind) -> ParamSpec {
+        ParamSpec { name: name.into(), kind: Some(kind), units: None }
+    }
+
+    pub fn any(name: &str) -> ParamSpec {
+        ParamSpec { name: name.into(), kind: None, units: None }
+    }
+}
+
+/// Where and when a call runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CallMode {
+    /// On the caller's thread, now (for thread-sensitive work such as painting).
+    Immediate,
+    /// On a DataServer worker (or the method owner's serial executor), after `delay`.
+    Queued,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CallOptions {
+    pub mode: CallMode,
+    /// Run the call this long from now (implies `Queued`).
+    pub delay: Duration,
+    /// Give up waiting for an answer after this long: the outcome is `TimedOut`.
+    pub timeout: Option<Duration>,
+}
+
+impl Default for CallOptions {
+    fn default() -> Self {
+        CallOptions { mode: CallMode::Queued, delay: Duration::ZERO, timeout: None }
+    }
+}
+
+impl CallOptions {
+    pub fn immediate() -> CallOptions {
+        CallOptions { mode: CallMode::Immediate, ..CallOptions::default() }
+    }
+
+    pub fn queued() -> CallOptions {
+        CallOptions::default()
+    }
+
+    pub fn delayed(delay: Duration) -> CallOptions {
+        CallOptions { delay, ..CallOptions::default() }
+    }
+
+    pub fn timeout(mut self, t: Duration) -> CallOptions {
+        self.timeout = Some(t);
+        self
+    }
+}
+
+/// What a method publishes about itself.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodSpec {
+    pub name: PropName,
+    pub params: Vec<ParamSpec>,
+    pub results: Vec<ParamSpec>,
+    pub defaults: CallOptions,
+    pub description: Option<Arc<str>>,
+}
+
+impl MethodSpec {
+    pub fn new(name: &str) -> MethodSpec {
+        MethodSpec {
+            name: PropName::new(name),
+            params: Vec::new(),
+            results: Vec::new(),
+            defaults: CallOptions::default(),
+            description: None,
+        }
+    }
+
+    pub fn param(mut self, p: ParamSpec) -> MethodSpec {
+        self.params.push(p);
+        self
+    }
+
+    pub fn result(mut self, p: ParamSpec) -> MethodSpec {
+        self.results.push(p);
+        self
+    }
+
+    pub fn defaults(mut self, o: CallOptions) -> MethodSpec {
+        self.defaults = o;
+        self
+    }
+
+    pub fn describe(mut self, d: &str) -> MethodSpec {
+        self.description = Some(d.into());
+        self
+    }
+}
+
+/// The outcome of a method call.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CallOutcome {
+    Accepted(Vec<Value>),
+    /// The module declined, with its reason ("engine already running").
+    Refused(String),
+    /// The call could not be carried out (bad arguments, a lost link, a panic).
+    Failed(String),
+    NoSuchMethod,
+    NoSuchObject,
+    /// No answer within the call's timeout.
+    TimedOut,
+}
+
+impl CallOutcome {
+    pub fn is_accepted(&self) -> bool {
+        matches!(self, CallOutcome::Accepted(_))
+    }
+
+    /// A stable one-word name (`accepted`, `refused`, …) for logs and displays.
+    pub fn label(&self) -> &'static str {
+        match self {
+            CallOutcome::Accepted(_) => "accepted",
+            CallOutcome::Refused(_) => "refused",
+            CallOutcome::Failed(_) => "failed",
+            CallOutcome::NoSuchMethod => "no_such_method",
+            CallOutcome::NoSuchObject => "no_such_object",
+            CallOutcome::TimedOut => "timed_out",
+        }
+    }
+}
+
+impl fmt::Display for CallOutcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CallOutcome::Accepted(r) if r.is_empty() => f.write_str("accepted"),
+            CallOutcome::Accepted(r) => write!(f, "accepted: {r:?}"),
+            CallOutcome::Refused(why) => write!(f, "refused: {why}"),
+            CallOutcome::Failed(why) => write!(f, "failed: {why}"),
+            CallOutcome::NoSuchMethod => f.write_str("no such method"),
+            CallOutcome::NoSuchObject => f.write_str("no such object"),
+            CallOutcome::TimedOut => f.write_str("timed out"),
+        }
+    }
+}
+
+type Completion = Box<dyn FnOnce(CallOutcome) + Send + 'static>;
+
+struct ReplySlot {
+    done: Mutex<Option<Completion>>,
+}
+
+impl ReplySlot {
+    fn finish(&self, outcome: CallOutcome) -> bool {
+        let done = self.done.lock().take();
+        match done {
+            Some(f) => {
+                f(outcome);
+                true
+            }
+            None => false,
+        }
+    }
+}
+
+/// The right to answer one call, once. Dropping it unanswered answers `Failed`.
+pub struct Responder {
+    slot: Option<Arc<ReplySlot>>,
+}
+
+impl Responder {
+    /// Answers the call. Returns false when the call had already ended (timed out).
+    pub fn reply(mut self, outcome: CallOutcome) -> bool {
+        self.slot.take().is_some_and(|s| s.finish(outcome))
+    }
+
+    pub fn accept(self, results: Vec<Value>) -> bool {
+        self.reply(CallOutcome::Accepted(results))
+    }
+
+    pub fn refuse(self, reason: impl Into<String>) -> bool {
+        self.reply(CallOutcome::Refused(reason.into()))
+    }
+
+    pub fn fail(self, error: impl Into<String>) -> bool {
+        self.reply(CallOutcome::Failed(error.into()))
+    }
+}
+
+impl Drop for Responder {
+    fn drop(&mut self) {
+        if let Some(s) = self.slot.take() {
+            s.finish(CallOutcome::Failed("the method's handler ended without answering".into()));
+        }
+    }
+}
+
+/// One call as its handler sees it.
+pub struct Call {
+    pub object: Guid,
+    pub method: PropName,
+    pub args: Arc<[Value]>,
+    pub responder: Responder,
+}
+
+pub(crate) type Handler = Arc<dyn Fn(Call) + Send + Sync + 'static>;
+
+pub(crate) struct Method {
+    pub(crate) spec: MethodSpec,
+    handler: Handler,
+    executor: Option<Executor>,
+}
+
+impl Method {
+    /// Where queued calls of this method run.
+    pub(crate) fn target(&self, pool: &Arc<crate::executor::Pool>) -> Target {
+        match &self.executor {
+            Some(ex) => Target::Serial(ex.clone()),
+            None => Target::Pool(pool.clone()),
+        }
+    }
+}
+
+impl DataServer {
+    /// Publishes a method under an object. The handler answers through `call.responder`
+    /// (now, or later from another thread: a protocol module answers when the vehicle
+    /// acknowledges).
+    pub fn publish_method(
+        &self,
+        guid: Guid,
+        spec: MethodSpec,
+        handler: impl Fn(Call) + Send + Sync + 'static,
+    ) -> Result<(), DsError> {
+        self.publish_method_with(guid, spec, None, Arc::new(handler))
+    }
+
+    /// Like `publish_method`, but queued calls run on the module's serial executor.
+    pub fn publish_method_on(
+        &self,
+        executor: &Executor,
+        guid: Guid,
+        spec: MethodSpec,
+        handler: impl Fn(Call) + Send + Sync + 'static,
+    ) -> Result<(), DsError> {
+        self.publish_method_with(guid, spec, Some(executor.clone()), Arc::new(handler))
+    }
+
+    /// Publishes a method whose handler answers at once with an outcome.
+    pub fn publish_method_fn(
+        &self,
+        guid: Guid,
+        spec: MethodSpec,
+        handler: impl Fn(&[Value]) -> CallOutcome + Send + Sync + 'static,
+    ) -> Result<(), DsError> {
+        self.publish_method(guid, spec, move |call: Call| {
+            let outcome = handler(&call.args);
+            call.responder.reply(outcome);
+        })
+    }
+
+    fn publish_method_with(
+        &self,
+        guid: Guid,
+        spec: MethodSpec,
+        executor: Option<Executor>,
+        handler: Handler,
+    ) -> Result<(), DsError> {
+        let o = self.object(guid)?;
+        let mut os = o.state.write();
+        if !os.alive {
+            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(guid) });
+        }
+        if os.methods.contains_key(&spec.name) {
+            return Err(DsError::MethodExists { object: obj_ref_of(guid, &os), method: spec.name });
+        }
+        os.methods.insert(spec.name, Arc::new(Method { spec, handler, executor }));
+        Ok(())
+    }
+
+    pub fn unpublish_method(&self, guid: Guid, name: impl Into<PropName>) -> Result<(), DsError> {
+        let o = self.object(guid)?;
+        o.state.write().methods.remove(&name.into());
+        Ok(())
+    }
+
+    /// The methods of an object, sorted by name.
+    pub fn methods(&self, guid: Guid) -> Result<Vec<MethodSpec>, DsError> {
+        let o = self.object(guid)?;
+        let mut v: Vec<MethodSpec> =
+            o.state.read().methods.values().map(|m| m.spec.clone()).collect();
+        v.sort_by(|a, b| a.name.as_str().cmp(b.name.as_str()));
+        Ok(v)
+    }
+
+    /// Calls a method. `done` receives the outcome exactly once: on this thread for
+    /// immediate calls and for calls that cannot start, else where the handler answers.
+    /// `options` overrides the method's default call options.
+    pub fn call(
+        &self,
+        guid: Guid,
+        name: impl Into<PropName>,
+        args: Vec<Value>,
+        options: Option<CallOptions>,
+        done: impl FnOnce(CallOutcome) + Send + 'static,
+    ) {
+        let name = name.into();
+        let method = match self.object(guid) {
+            Err(_) => return done(CallOutcome::NoSuchObject),
+            Ok(o) => {
+                let os = o.state.read();
+                if !os.alive {
+                    return done(CallOutcome::NoSuchObject);
+                }
+                match os.methods.get(&name) {
+                    Some(m) => m.clone(),
+                    None => return done(CallOutcome::NoSuchMethod),
+                }
+            }
+        };
+        let args = match check_args(&method.spec, args) {
+            Ok(a) => a,
+            Err(why) => return done(CallOutcome::Failed(why)),
+        };
+        let options = options.unwrap_or(method.spec.defaults);
+        let slot = Arc::new(ReplySlot { done: Mutex::new(Some(Box::new(done))) });
+        if let Some(t) = options.timeout {
+            let s = slot.clone();
+            self.inner.timer.schedule(
+                t,
+                Target::Pool(self.inner.pool.clone()),
+                Box::new(move || {
+                    s.finish(CallOutcome::TimedOut);
+                }),
+            );
+        }
+        let call =
+            Call { object: guid, method: name, args, responder: Responder { slot: Some(slot) } };
+        let handler = method.handler.clone();
+        let run = move || {
+            // A panicking handler drops its responder while unwinding: the caller sees
+            // Failed, and the OCU goes on.
+            let _ = catch_unwind(AssertUnwindSafe(|| handler(call)));
+        };
+        if options.mode == CallMode::Immediate && options.delay.is_zero() {
+            run();
+            return;
+        }
+        let target = method.target(&self.inner.pool);
+        if options.delay.is_zero() {
+            target.submit(Box::new(run));
+        } else {
+            self.inner.timer.schedule(options.delay, target, Box::new(run));
+        }
+    }
+
+    /// Calls a method and waits for its outcome. Not for use on a serial executor that the
+    /// method itself runs on (it would wait for itself).
+    pub fn call_wait(
+        &self,
+        guid: Guid,
+        name: impl Into<PropName>,
+        args: Vec<Value>,
+        options: Option<CallOptions>,
+    ) -> CallOutcome {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        self.call(guid, name, args, options, move |o| {
+            let _ = tx.send(o);
+        });
+        rx.recv().unwrap_or(CallOutcome::Failed("the call was dropped".into()))
+    }
+
+    /// Runs `f` on `executor` (or any worker) after `delay`: how a module does periodic
+    /// work without a thread of its own (re-arm from inside `f`).
+    pub fn run_after(
+        &self,
+        delay: Duration,
+        executor: Option<&Executor>,
+        f: impl FnOnce() + Send + 'static,
+    ) {
+        let target = match executor {
+            Some(ex) => Target::Serial(ex.clone()),
+            None => Target::Pool(self.inner.pool.clone()),
+        };
+        self.inner.timer.schedule(delay, target, Box::new(f));
+    }
+}
+
+fn check_args(spec: &MethodSpec, args: Vec<Value>) -> Result<Arc<[Value]>, String> {
+    if args.len() != spec.params.len() {
+        let names: Vec<&str> = spec.params.iter().map(|p| &*p.name).collect();
+        return Err(format!(
+            "`{}` takes {} argument(s) ({}), got {}",
+            spec.name,
+            spec.params.len(),
+            names.join(", "),
+            args.len()
+        ));
+    }
+    let mut out = Vec::with_capacity(args.len());
+    for (p, a) in spec.params.iter().zip(args) {
+        let a = match (p.kind, a) {
+            (None, a) => a,
+            (Some(ValueKind::Float), Value::Int(i)) => Value::Float(i as f64),
+            (Some(k), a) if a.kind() == k => a,
+            (Some(k), a) => {
+                return Err(format!(
+                    "argument `{}` of `{}` must be {k}, got {}",
+                    p.name,
+                    spec.name,
+                    a.kind()
+                ));
+            }
+        };
+        out.push(a);
+    }
+    Ok(out.into())
+}

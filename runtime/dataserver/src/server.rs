@@ -1,0 +1,636 @@
+//! The DataServer: the object tree, properties and subscriptions.
+
+use crate::error::{DsError, ObjRef};
+use crate::executor::{Executor, Pool, Stats, Target, Timer};
+use crate::hash::BuildIdHasher;
+use crate::meta::{ObjectInfo, PropMeta};
+use crate::notification::{Kind, Notification, Subject};
+use crate::object::{ObjState, Object, Prop};
+use crate::subscription::{Callback, Sub, SubscriptionId, Topic};
+use mocu_value::{Guid, PropName, Value, ValueKind};
+use parking_lot::Mutex;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Settings of a DataServer.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Worker threads that deliver notifications and run queued calls.
+    pub workers: usize,
+}
+
+impl Default for Config {
+    fn default() -> Config {
+        let cores = std::thread::available_parallelism().map_or(2, |n| n.get());
+        Config { workers: cores.clamp(2, 8) }
+    }
+}
+
+/// A handle on the shared-world model. Cheap to clone; every module holds one.
+#[derive(Clone)]
+pub struct DataServer {
+    pub(crate) inner: Arc<Inner>,
+}
+
+pub(crate) struct Inner {
+    pub(crate) objects: papaya::HashMap<Guid, Arc<Object>, BuildIdHasher>,
+    /// Serialises changes to the tree's shape (create, delete, move). Property reads and
+    /// writes never take it.
+    structure: Mutex<()>,
+    next_guid: AtomicU64,
+    next_sub: AtomicU64,
+    pub(crate) subs: papaya::HashMap<SubscriptionId, (Guid, Arc<Sub>), BuildIdHasher>,
+    pub(crate) pool: Arc<Pool>,
+    pub(crate) timer: Timer,
+    pub(crate) streams: crate::stream::Streams,
+}
+
+impl Default for DataServer {
+    fn default() -> Self {
+        DataServer::new(Config::default())
+    }
+}
+
+impl DataServer {
+    pub fn new(config: Config) -> DataServer {
+        let pool = Pool::new(config.workers);
+        let timer = Timer::new(pool.stats.clone());
+        let inner = Inner {
+            objects: papaya::HashMap::builder().hasher(BuildIdHasher::default()).build(),
+            structure: Mutex::new(()),
+            next_guid: AtomicU64::new(Guid::ROOT.get() + 1),
+            next_sub: AtomicU64::new(1),
+            subs: papaya::HashMap::builder().hasher(BuildIdHasher::default()).build(),
+            pool,
+            timer,
+            streams: Default::default(),
+        };
+        let root = Object::new(Guid::ROOT, ObjectInfo::new("root", "root"), None);
+        inner.objects.pin().insert(Guid::ROOT, root);
+        DataServer { inner: Arc::new(inner) }
+    }
+
+    pub fn root(&self) -> Guid {
+        Guid::ROOT
+    }
+
+    // ----- objects -------------------------------------------------------------------
+
+    pub(crate) fn object(&self, guid: Guid) -> Result<Arc<Object>, DsError> {
+        self.inner
+            .objects
+            .pin()
+            .get(&guid)
+            .cloned()
+            .ok_or(DsError::NoSuchObject { object: ObjRef::unnamed(guid) })
+    }
+
+    pub(crate) fn obj_ref(&self, guid: Guid) -> ObjRef {
+        match self.inner.objects.pin().get(&guid) {
+            Some(o) => ObjRef { guid, name: Some(o.state.read().info.name.clone()) },
+            None => ObjRef::unnamed(guid),
+        }
+    }
+
+    /// Publishes a new object as the last child of `parent`; returns its new GUID.
+    pub fn create_object(&self, parent: Guid, info: ObjectInfo) -> Result<Guid, DsError> {
+        self.create_object_at(parent, usize::MAX, info)
+    }
+
+    /// Publishes a new object at position `index` among `parent`'s children (clamped to the
+    /// end).
+    pub fn create_object_at(
+        &self,
+        parent: Guid,
+        index: usize,
+        info: ObjectInfo,
+    ) -> Result<Guid, DsError> {
+        let _shape = self.inner.structure.lock();
+        let p = self.object(parent)?;
+        let mut ps = p.state.write();
+        if !ps.alive {
+            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(parent) });
+        }
+        let guid = self.new_guid();
+        let obj = Object::new(guid, info.clone(), Some(parent));
+        self.inner.objects.pin().insert(guid, obj);
+        let index = index.min(ps.children.len());
+        ps.children.insert(index, guid);
+        notify_child(&ps, Kind::New, guid, &info, index);
+        Ok(guid)
+    }
+
+    /// Publishes a new object between `parent` and its child `child`: the new object takes
+    /// the child's place in `parent`'s order and the child becomes its only child.
+    pub fn insert_between(
+        &self,
+        parent: Guid,
+        child: Guid,
+        info: ObjectInfo,
+    ) -> Result<Guid, DsError> {
+        let _shape = self.inner.structure.lock();
+        let p = self.object(parent)?;
+        let c = self.object(child)?;
+        let mut ps = p.state.write();
+        let Some(index) = ps.children.iter().position(|&g| g == child) else {
+            drop(ps);
+            return Err(DsError::NotAChild {
+                parent: self.obj_ref(parent),
+                child: self.obj_ref(child),
+            });
+        };
+        let guid = self.new_guid();
+        let mid = Object::new(guid, info.clone(), Some(parent));
+        let mut cs = c.state.write();
+        let child_info = cs.info.clone();
+        cs.parent = Some(guid);
+        drop(cs);
+        mid.state.write().children.push(child);
+        self.inner.objects.pin().insert(guid, mid);
+        ps.children[index] = guid;
+        notify_child(&ps, Kind::Deleted, child, &child_info, index);
+        notify_child(&ps, Kind::New, guid, &info, index);
+        Ok(guid)
+    }
+
+    /// Deletes an object and its whole subtree.
+    pub fn delete_object(&self, guid: Guid) -> Result<(), DsError> {
+        if guid == Guid::ROOT {
+            return Err(DsError::RootIsPermanent);
+        }
+        let _shape = self.inner.structure.lock();
+        let o = self.object(guid)?;
+        let parent = o.state.read().parent;
+        if let Some(parent) = parent {
+            let p = self.object(parent)?;
+            let mut ps = p.state.write();
+            if let Some(index) = ps.children.iter().position(|&g| g == guid) {
+                ps.children.remove(index);
+                let info = o.state.read().info.clone();
+                notify_child(&ps, Kind::Deleted, guid, &info, index);
+            }
+        }
+        self.kill_subtree(guid);
+        Ok(())
+    }
+
+    /// Deletes `guid` and promotes its child `keep` into its place (same position in the
+    /// parent's order). The object's other children are deleted with it.
+    pub fn delete_and_promote(&self, guid: Guid, keep: Guid) -> Result<(), DsError> {
+        if guid == Guid::ROOT {
+            return Err(DsError::RootIsPermanent);
+        }
+        let _shape = self.inner.structure.lock();
+        let o = self.object(guid)?;
+        let k = self.object(keep)?;
+        let mut os = o.state.write();
+        let Some(kidx) = os.children.iter().position(|&g| g == keep) else {
+            drop(os);
+            return Err(DsError::NotAChild {
+                parent: self.obj_ref(guid),
+                child: self.obj_ref(keep),
+            });
+        };
+        let parent = os.parent.ok_or(DsError::RootIsPermanent)?;
+        os.children.remove(kidx);
+        let keep_info = k.state.read().info.clone();
+        notify_child(&os, Kind::Deleted, keep, &keep_info, kidx);
+        let info = os.info.clone();
+        drop(os);
+        k.state.write().parent = Some(parent);
+        let p = self.object(parent)?;
+        let mut ps = p.state.write();
+        if let Some(index) = ps.children.iter().position(|&g| g == guid) {
+            ps.children[index] = keep;
+            notify_child(&ps, Kind::Deleted, guid, &info, index);
+            notify_child(&ps, Kind::New, keep, &keep_info, index);
+        }
+        drop(ps);
+        self.kill_subtree(guid);
+        Ok(())
+    }
+
+    /// Renames an object (and/or changes its type); its parent's child subscribers see
+    /// `Changed`.
+    pub fn set_info(&self, guid: Guid, info: ObjectInfo) -> Result<(), DsError> {
+        if guid == Guid::ROOT {
+            return Err(DsError::RootIsPermanent);
+        }
+        let _shape = self.inner.structure.lock();
+        let o = self.object(guid)?;
+        let parent = {
+            let mut os = o.state.write();
+            if os.info == info {
+                return Ok(());
+            }
+            os.info = info.clone();
+            os.parent
+        };
+        if let Some(parent) = parent {
+            let p = self.object(parent)?;
+            let ps = p.state.read();
+            if let Some(index) = ps.children.iter().position(|&g| g == guid) {
+                notify_child(&ps, Kind::Changed, guid, &info, index);
+            }
+        }
+        Ok(())
+    }
+
+    /// Marks every object of the subtree dead, tells each one's subscribers (parents
+    /// first), and removes them from the table. Caller holds the structure lock and has
+    /// already unlinked `guid` from its parent.
+    fn kill_subtree(&self, guid: Guid) {
+        let mut stack = vec![guid];
+        let objects = self.inner.objects.pin();
+        while let Some(g) = stack.pop() {
+            let Some(o) = objects.get(&g).cloned() else { continue };
+            let mut guard = o.state.write();
+            let os = &mut *guard;
+            os.alive = false;
+            stack.extend(os.children.iter().rev().copied());
+            let gone = Notification { object: g, kind: Kind::Deleted, subject: Subject::Object };
+            for s in os.prop_subs.drain(..).chain(os.child_subs.drain(..)) {
+                s.enqueue(gone.clone());
+                self.inner.subs.pin().remove(&s.id);
+            }
+            os.methods.clear();
+            drop(guard);
+            objects.remove(&g);
+            self.inner.streams.forget(g);
+        }
+    }
+
+    fn new_guid(&self) -> Guid {
+        let raw = self.inner.next_guid.fetch_add(1, Ordering::Relaxed);
+        Guid::new(raw).expect("GUIDs count up from 2 and never wrap in 2^64 publications")
+    }
+
+    pub fn exists(&self, guid: Guid) -> bool {
+        self.inner.objects.pin().contains_key(&guid)
+    }
+
+    pub fn info(&self, guid: Guid) -> Result<ObjectInfo, DsError> {
+        Ok(self.object(guid)?.state.read().info.clone())
+    }
+
+    pub fn parent(&self, guid: Guid) -> Result<Option<Guid>, DsError> {
+        Ok(self.object(guid)?.state.read().parent)
+    }
+
+    /// The children of an object, in order.
+    pub fn children(&self, guid: Guid) -> Result<Vec<Guid>, DsError> {
+        Ok(self.object(guid)?.state.read().children.clone())
+    }
+
+    /// The first child of `parent` named `name`.
+    pub fn find_child(&self, parent: Guid, name: &str) -> Result<Option<Guid>, DsError> {
+        let p = self.object(parent)?;
+        let ps = p.state.read();
+        let objects = self.inner.objects.pin();
+        Ok(ps
+            .children
+            .iter()
+            .copied()
+            .find(|c| objects.get(c).is_some_and(|o| &*o.state.read().info.name == name)))
+    }
+
+    /// Resolves `root.a.b` (object segments only) to an object, if it exists now.
+    pub fn resolve(&self, path: &[&str]) -> Option<Guid> {
+        let mut at = Guid::ROOT;
+        for seg in path {
+            at = self.find_child(at, seg).ok()??;
+        }
+        Some(at)
+    }
+
+    /// How many objects exist, root included.
+    pub fn object_count(&self) -> usize {
+        self.inner.objects.len()
+    }
+
+    // ----- properties ----------------------------------------------------------------
+
+    /// Creates a property with metadata; refused if the name is taken or the value does
+    /// not fit the metadata.
+    pub fn create_property(
+        &self,
+        guid: Guid,
+        name: impl Into<PropName>,
+        value: Value,
+        meta: PropMeta,
+    ) -> Result<(), DsError> {
+        let name = name.into();
+        let o = self.object(guid)?;
+        let mut os = o.state.write();
+        if !os.alive {
+            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(guid) });
+        }
+        if os.props.get(name).is_some() {
+            return Err(DsError::PropertyExists { object: obj_ref_of(guid, &os), property: name });
+        }
+        let value = validate(guid, &os, name, &meta, value)?;
+        let meta = (meta != PropMeta::default()).then(|| Arc::new(meta));
+        add_prop(&mut os, name, value, meta);
+        Ok(())
+    }
+
+    /// Writes a property, creating it (untyped) if absent. A write equal to the current
+    /// value changes nothing and notifies nobody.
+    pub fn set(&self, guid: Guid, name: impl Into<PropName>, value: Value) -> Result<(), DsError> {
+        let name = name.into();
+        let o = self.object(guid)?;
+        let mut os = o.state.write();
+        if !os.alive {
+            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(guid) });
+        }
+        match os.props.get(name) {
+            None => {
+                add_prop(&mut os, name, value, None);
+                Ok(())
+            }
+            Some(p) => {
+                let value = match &p.meta {
+                    Some(meta) => validate(guid, &os, name, meta, value)?,
+                    None => value,
+                };
+                if p.value == value {
+                    return Ok(());
+                }
+                let os = &mut *os;
+                let p = os.props.get_mut(name).expect("found above under the same lock");
+                p.value = value.clone();
+                notify_prop(&os.prop_subs, guid, Kind::Changed, name, Some(value));
+                Ok(())
+            }
+        }
+    }
+
+    /// Writes an existing property; refused if it does not exist.
+    pub fn update(
+        &self,
+        guid: Guid,
+        name: impl Into<PropName>,
+        value: Value,
+    ) -> Result<(), DsError> {
+        let name = name.into();
+        {
+            let o = self.object(guid)?;
+            let os = o.state.read();
+            if os.props.get(name).is_none() {
+                return Err(DsError::NoSuchProperty {
+                    object: obj_ref_of(guid, &os),
+                    property: name,
+                });
+            }
+        }
+        self.set(guid, name, value)
+    }
+
+    /// Reads a property's current value.
+    pub fn get(&self, guid: Guid, name: impl Into<PropName>) -> Result<Value, DsError> {
+        let name = name.into();
+        let o = self.object(guid)?;
+        let os = o.state.read();
+        match os.props.get(name) {
+            Some(p) => Ok(p.value.clone()),
+            None => Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name }),
+        }
+    }
+
+    /// Reads a property, `None` when the object or the property is absent.
+    pub fn try_get(&self, guid: Guid, name: PropName) -> Option<Value> {
+        let objects = self.inner.objects.pin();
+        let o = objects.get(&guid)?;
+        let os = o.state.read();
+        os.props.get(name).map(|p| p.value.clone())
+    }
+
+    pub fn meta(&self, guid: Guid, name: impl Into<PropName>) -> Result<PropMeta, DsError> {
+        let name = name.into();
+        let o = self.object(guid)?;
+        let os = o.state.read();
+        match os.props.get(name) {
+            Some(p) => Ok(p.meta.as_deref().cloned().unwrap_or_default()),
+            None => Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name }),
+        }
+    }
+
+    /// The object's properties with their values, in creation order.
+    pub fn properties(&self, guid: Guid) -> Result<Vec<(PropName, Value)>, DsError> {
+        let o = self.object(guid)?;
+        let os = o.state.read();
+        Ok(os.props.iter().map(|p| (p.name, p.value.clone())).collect())
+    }
+
+    pub fn delete_property(&self, guid: Guid, name: impl Into<PropName>) -> Result<(), DsError> {
+        let name = name.into();
+        let o = self.object(guid)?;
+        let mut os = o.state.write();
+        if os.props.remove(name).is_none() {
+            return Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name });
+        }
+        notify_prop(&os.prop_subs, guid, Kind::Deleted, name, None);
+        Ok(())
+    }
+
+    // ----- subscriptions -------------------------------------------------------------
+
+    /// Subscribes; the callback runs on the DataServer's workers, one notification at a
+    /// time for this subscription. Everything already there arrives first, as `New`.
+    pub fn subscribe(
+        &self,
+        topic: Topic,
+        callback: impl FnMut(&Notification) + Send + 'static,
+    ) -> Result<SubscriptionId, DsError> {
+        self.subscribe_with(topic, None, Box::new(callback))
+    }
+
+    /// Subscribes with the callback running on a module's serial executor, in order with
+    /// everything else given to that executor.
+    pub fn subscribe_on(
+        &self,
+        executor: &Executor,
+        topic: Topic,
+        callback: impl FnMut(&Notification) + Send + 'static,
+    ) -> Result<SubscriptionId, DsError> {
+        self.subscribe_with(topic, Some(executor), Box::new(callback))
+    }
+
+    fn subscribe_with(
+        &self,
+        topic: Topic,
+        executor: Option<&Executor>,
+        callback: Callback,
+    ) -> Result<SubscriptionId, DsError> {
+        let guid = topic.object();
+        let o = self.object(guid)?;
+        let id = SubscriptionId(self.inner.next_sub.fetch_add(1, Ordering::Relaxed));
+        let target = match executor {
+            Some(ex) => Target::Serial(ex.clone()),
+            None => Target::Pool(self.inner.pool.clone()),
+        };
+        let names = match &topic {
+            Topic::Properties { names, .. } => names.as_ref().map(|n| n.clone().into_boxed_slice()),
+            Topic::Children { .. } => None,
+        };
+        let sub = Sub::new(id, names, target, callback, self.inner.pool.stats.clone());
+        // Children change shape under the structure lock; take it so the initial list and
+        // later changes cannot interleave.
+        let _shape = matches!(topic, Topic::Children { .. }).then(|| self.inner.structure.lock());
+        let mut os = o.state.write();
+        if !os.alive {
+            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(guid) });
+        }
+        match topic {
+            Topic::Properties { .. } => {
+                for p in os.props.iter().filter(|p| sub.wants(p.name)) {
+                    sub.enqueue(Notification {
+                        object: guid,
+                        kind: Kind::New,
+                        subject: Subject::Property { name: p.name, value: Some(p.value.clone()) },
+                    });
+                }
+                os.prop_subs.push(sub.clone());
+            }
+            Topic::Children { .. } => {
+                let objects = self.inner.objects.pin();
+                for (index, c) in os.children.iter().enumerate() {
+                    if let Some(child) = objects.get(c) {
+                        let info = child.state.read().info.clone();
+                        sub.enqueue(child_note(guid, Kind::New, *c, &info, index));
+                    }
+                }
+                os.child_subs.push(sub.clone());
+            }
+        }
+        drop(os);
+        self.inner.subs.pin().insert(id, (guid, sub));
+        Ok(id)
+    }
+
+    /// Ends a subscription. When it returns, its callback is not running and will not run
+    /// again (unless called from that very callback, which then finishes). Unknown or
+    /// already-ended ids are ignored: ending twice is harmless.
+    pub fn unsubscribe(&self, id: SubscriptionId) {
+        let Some((guid, sub)) = self.inner.subs.pin().remove(&id).cloned() else { return };
+        sub.cancel();
+        if let Ok(o) = self.object(guid) {
+            let mut os = o.state.write();
+            os.prop_subs.retain(|s| s.id != id);
+            os.child_subs.retain(|s| s.id != id);
+        }
+    }
+
+    /// Live subscriptions (for leak tests and statistics).
+    pub fn subscription_count(&self) -> usize {
+        self.inner.subs.len()
+    }
+
+    // ----- executors -----------------------------------------------------------------
+
+    /// A new serial executor for a module: everything given to it runs in order, one at a
+    /// time, on the DataServer's workers.
+    pub fn serial_executor(&self) -> Executor {
+        Executor::new(self.inner.pool.clone())
+    }
+
+    /// Waits until no notification or queued call is pending or running (delayed calls
+    /// that are not yet due do not count). For tests and orderly shutdown.
+    pub fn quiesce(&self) {
+        crate::executor::wait_quiet(&self.inner.pool);
+    }
+
+    /// Delayed calls not yet due.
+    pub fn pending_timers(&self) -> usize {
+        self.inner.timer.pending()
+    }
+
+    /// Counters of work done.
+    pub fn stats(&self) -> &Stats {
+        &self.inner.pool.stats
+    }
+}
+
+pub(crate) fn obj_ref_of(guid: Guid, os: &ObjState) -> ObjRef {
+    ObjRef { guid, name: Some(os.info.name.clone()) }
+}
+
+fn add_prop(os: &mut ObjState, name: PropName, value: Value, meta: Option<Arc<PropMeta>>) {
+    os.props.insert(Prop { name, value: value.clone(), meta });
+    notify_prop(&os.prop_subs, os.self_guid, Kind::New, name, Some(value));
+}
+
+fn notify_prop(subs: &[Arc<Sub>], guid: Guid, kind: Kind, name: PropName, value: Option<Value>) {
+    for s in subs.iter().filter(|s| s.wants(name)) {
+        s.enqueue(Notification {
+            object: guid,
+            kind,
+            subject: Subject::Property { name, value: value.clone() },
+        });
+    }
+}
+
+fn child_note(
+    parent: Guid,
+    kind: Kind,
+    child: Guid,
+    info: &ObjectInfo,
+    index: usize,
+) -> Notification {
+    Notification {
+        object: parent,
+        kind,
+        subject: Subject::Child {
+            guid: child,
+            name: info.name.clone(),
+            kind: info.kind.clone(),
+            index,
+        },
+    }
+}
+
+fn notify_child(ps: &ObjState, kind: Kind, child: Guid, info: &ObjectInfo, index: usize) {
+    if ps.child_subs.is_empty() {
+        return;
+    }
+    let parent = ps.self_guid;
+    let n = child_note(parent, kind, child, info, index);
+    for s in &ps.child_subs {
+        s.enqueue(n.clone());
+    }
+}
+
+/// Checks a write against a property's metadata; returns the value to store.
+fn validate(
+    guid: Guid,
+    os: &ObjState,
+    name: PropName,
+    meta: &PropMeta,
+    value: Value,
+) -> Result<Value, DsError> {
+    let value = match (meta.kind, value) {
+        (None, v) => v,
+        (Some(ValueKind::Float), Value::Int(i)) => Value::Float(i as f64),
+        (Some(k), v) if v.kind() == k => v,
+        (Some(k), v) => {
+            return Err(DsError::TypeMismatch {
+                object: obj_ref_of(guid, os),
+                property: name,
+                expected: k,
+                got: v.kind(),
+            });
+        }
+    };
+    if let (Some((min, max)), Some(x)) = (meta.range, value.as_f64())
+        && !(min <= x && x <= max)
+    {
+        return Err(DsError::OutOfRange {
+            object: obj_ref_of(guid, os),
+            property: name,
+            value: x,
+            min,
+            max,
+        });
+    }
+    Ok(value)
+}

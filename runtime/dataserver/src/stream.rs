@@ -1,0 +1,245 @@
+//! Streams (paper §3.2): a listener object; receivers join it by associating an object and
+//! a receiver method; a message sent to the listener reaches every receiver, in order.
+//! Each receiver has a bounded queue with an explicit overflow policy.
+
+use crate::error::{DsError, ObjRef};
+use crate::executor::Target;
+use crate::hash::BuildIdHasher;
+use crate::meta::ObjectInfo;
+use crate::method::{CallOptions, CallOutcome};
+use crate::server::DataServer;
+use mocu_value::{Guid, PropName, Value};
+use parking_lot::{Condvar, Mutex, RwLock};
+use std::collections::VecDeque;
+use std::sync::Arc;
+
+/// What a receiver's full queue does with a new message.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Overflow {
+    /// The sender waits for room: no loss (commands). Never send with `Block` from the
+    /// receiver's own serial executor: it would wait for itself.
+    Block,
+    /// The oldest queued message is dropped and counted in the association object's
+    /// `dropped` property (video: the display never lags behind the camera).
+    DropOldest,
+}
+
+/// The type name of listener objects and of receiver associations.
+pub const LISTENER_TYPE: &str = "listener";
+pub const RECEIVER_TYPE: &str = "receiver";
+
+#[derive(Default)]
+pub(crate) struct Streams {
+    listeners: papaya::HashMap<Guid, Arc<Listener>, BuildIdHasher>,
+    /// Association object → its listener.
+    assocs: papaya::HashMap<Guid, Guid, BuildIdHasher>,
+}
+
+#[derive(Default)]
+struct Listener {
+    receivers: RwLock<Vec<Arc<Receiver>>>,
+}
+
+struct Receiver {
+    assoc: Guid,
+    target: Guid,
+    method: PropName,
+    overflow: Overflow,
+    capacity: usize,
+    run_on: Target,
+    queue: Mutex<RecvQueue>,
+    room: Condvar,
+}
+
+#[derive(Default)]
+struct RecvQueue {
+    buf: VecDeque<Arc<[Value]>>,
+    scheduled: bool,
+    dropped: u64,
+    closed: bool,
+}
+
+impl Receiver {
+    fn close(&self) {
+        let mut q = self.queue.lock();
+        q.closed = true;
+        q.buf.clear();
+        self.room.notify_all();
+    }
+}
+
+impl Streams {
+    /// Called when an object is deleted: a deleted listener closes its receivers, a deleted
+    /// association leaves its listener.
+    pub(crate) fn forget(&self, guid: Guid) {
+        if let Some(l) = self.listeners.pin().remove(&guid) {
+            for r in l.receivers.read().iter() {
+                r.close();
+            }
+        }
+        if let Some(listener) = self.assocs.pin().remove(&guid)
+            && let Some(l) = self.listeners.pin().get(listener)
+        {
+            let mut rs = l.receivers.write();
+            rs.retain(|r| {
+                if r.assoc == guid {
+                    r.close();
+                }
+                r.assoc != guid
+            });
+        }
+    }
+}
+
+impl DataServer {
+    /// Publishes a listener object under `parent`.
+    pub fn create_listener(&self, parent: Guid, name: &str) -> Result<Guid, DsError> {
+        let g = self.create_object(parent, ObjectInfo::new(name, LISTENER_TYPE))?;
+        self.inner.streams.listeners.pin().insert(g, Arc::new(Listener::default()));
+        Ok(g)
+    }
+
+    /// Joins `receiver`'s method `method` to a listener, with a queue of `capacity`
+    /// messages. Returns the association object (a child of the listener, type
+    /// `receiver`); delete it, or call `leave`, to stop receiving.
+    pub fn join(
+        &self,
+        listener: Guid,
+        receiver: Guid,
+        method: &str,
+        overflow: Overflow,
+        capacity: usize,
+    ) -> Result<Guid, DsError> {
+        let method = PropName::new(method);
+        let l = self
+            .inner
+            .streams
+            .listeners
+            .pin()
+            .get(&listener)
+            .cloned()
+            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })?;
+        let run_on = {
+            let o = self.object(receiver)?;
+            let os = o.state.read();
+            match os.methods.get(&method) {
+                Some(m) => m.target(&self.inner.pool),
+                None => {
+                    return Err(DsError::NoSuchProperty {
+                        object: ObjRef { guid: receiver, name: Some(os.info.name.clone()) },
+                        property: method,
+                    });
+                }
+            }
+        };
+        let name = format!("{}.{}", self.info(receiver)?.name, method);
+        let assoc = self.create_object(listener, ObjectInfo::new(&name, RECEIVER_TYPE))?;
+        self.set(assoc, "target", Value::Guid(receiver))?;
+        self.set(assoc, "method", Value::str(method.as_str()))?;
+        self.set(assoc, "capacity", Value::Int(capacity as i64))?;
+        self.set(assoc, "dropped", Value::Int(0))?;
+        let r = Arc::new(Receiver {
+            assoc,
+            target: receiver,
+            method,
+            overflow,
+            capacity: capacity.max(1),
+            run_on,
+            queue: Mutex::default(),
+            room: Condvar::new(),
+        });
+        l.receivers.write().push(r);
+        self.inner.streams.assocs.pin().insert(assoc, listener);
+        Ok(assoc)
+    }
+
+    /// Leaves a listener (deletes the association object).
+    pub fn leave(&self, assoc: Guid) -> Result<(), DsError> {
+        self.delete_object(assoc)
+    }
+
+    /// Sends one message to every receiver of a listener, in order; returns how many
+    /// receivers it was queued for.
+    pub fn send(&self, listener: Guid, args: Vec<Value>) -> Result<usize, DsError> {
+        let l = self
+            .inner
+            .streams
+            .listeners
+            .pin()
+            .get(&listener)
+            .cloned()
+            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })?;
+        let msg: Arc<[Value]> = args.into();
+        let receivers = l.receivers.read().clone();
+        let mut sent = 0;
+        for r in receivers {
+            let mut q = r.queue.lock();
+            let mut dropped = None;
+            while q.buf.len() >= r.capacity && !q.closed {
+                match r.overflow {
+                    Overflow::DropOldest => {
+                        q.buf.pop_front();
+                        q.dropped += 1;
+                        dropped = Some(q.dropped);
+                    }
+                    Overflow::Block => r.room.wait(&mut q),
+                }
+            }
+            if q.closed {
+                continue;
+            }
+            q.buf.push_back(msg.clone());
+            sent += 1;
+            if !q.scheduled {
+                q.scheduled = true;
+                let ds = self.clone();
+                let r2 = r.clone();
+                r.run_on.submit(Box::new(move || ds.drain_receiver(r2)));
+            }
+            drop(q);
+            if let Some(n) = dropped {
+                let _ = self.set(r.assoc, "dropped", Value::Int(n as i64));
+            }
+        }
+        Ok(sent)
+    }
+
+    fn drain_receiver(&self, r: Arc<Receiver>) {
+        loop {
+            let msg = {
+                let mut q = r.queue.lock();
+                match q.buf.pop_front() {
+                    Some(m) => {
+                        r.room.notify_one();
+                        m
+                    }
+                    None => {
+                        q.scheduled = false;
+                        return;
+                    }
+                }
+            };
+            let ds = self.clone();
+            let assoc = r.assoc;
+            self.call(r.target, r.method, msg.to_vec(), Some(CallOptions::immediate()), move |o| {
+                if matches!(o, CallOutcome::NoSuchObject | CallOutcome::NoSuchMethod) {
+                    // The receiver is gone: the association goes with it.
+                    let _ = ds.delete_object(assoc);
+                }
+            });
+        }
+    }
+
+    /// The receivers of a listener (their association objects).
+    pub fn receivers(&self, listener: Guid) -> Result<Vec<Guid>, DsError> {
+        let l = self
+            .inner
+            .streams
+            .listeners
+            .pin()
+            .get(&listener)
+            .cloned()
+            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })?;
+        Ok(l.receivers.read().iter().map(|r| r.assoc).collect())
+    }
+}

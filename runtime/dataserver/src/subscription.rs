@@ -1,0 +1,214 @@
+//! One subscription: its pending changes (coalesced, in order), its callback, and the
+//! rules that make delivery safe: one batch at a time, nothing after `Deleted`, nothing
+//! after `unsubscribe` returns.
+
+use crate::executor::{Stats, Target};
+use crate::notification::{CoalesceKey, Kind, Notification, Subject};
+use mocu_value::{Guid, PropName};
+use parking_lot::{Condvar, Mutex};
+use std::collections::{HashMap, VecDeque};
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread::ThreadId;
+
+/// Identifies a subscription for `unsubscribe`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SubscriptionId(pub(crate) u64);
+
+/// What a subscription watches.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Topic {
+    /// The properties of an object: all of them (`names: None`) or only those named.
+    Properties { object: Guid, names: Option<Vec<PropName>> },
+    /// The children of an object.
+    Children { object: Guid },
+}
+
+impl Topic {
+    pub fn properties(object: Guid) -> Topic {
+        Topic::Properties { object, names: None }
+    }
+
+    pub fn property_names(object: Guid, names: &[&str]) -> Topic {
+        Topic::Properties { object, names: Some(names.iter().map(|n| PropName::new(n)).collect()) }
+    }
+
+    pub fn children(object: Guid) -> Topic {
+        Topic::Children { object }
+    }
+
+    pub fn object(&self) -> Guid {
+        match self {
+            Topic::Properties { object, .. } | Topic::Children { object } => *object,
+        }
+    }
+}
+
+pub(crate) type Callback = Box<dyn FnMut(&Notification) + Send + 'static>;
+
+pub(crate) struct Sub {
+    pub(crate) id: SubscriptionId,
+    /// Property names this subscription wants; `None` for all (property subscriptions).
+    pub(crate) names: Option<Box<[PropName]>>,
+    active: AtomicBool,
+    target: Target,
+    queue: Mutex<Pending>,
+    idle: Condvar,
+    callback: Mutex<Callback>,
+    stats: Arc<Stats>,
+}
+
+#[derive(Default)]
+struct Pending {
+    items: VecDeque<Option<Notification>>,
+    /// Absolute sequence number of `items[0]`.
+    head: u64,
+    /// Where the latest coalescable notification of each key sits (absolute sequence).
+    index: HashMap<CoalesceKey, u64, crate::hash::BuildIdHasher>,
+    scheduled: bool,
+    running_on: Option<ThreadId>,
+}
+
+impl Pending {
+    fn push(&mut self, n: Notification) {
+        if n.kind == Kind::Changed
+            && let Some(key) = n.coalesce_key()
+            && let Some(&seq) = self.index.get(&key)
+        {
+            // Coalesce: the earlier undelivered entry goes, the latest value moves to the
+            // back (after every change that happened before it), keeping its New-ness.
+            let slot = &mut self.items[(seq - self.head) as usize];
+            let kind = slot.as_ref().map_or(Kind::Changed, |old| old.kind);
+            *slot = None;
+            let seq = self.head + self.items.len() as u64;
+            self.items.push_back(Some(Notification { kind, ..n }));
+            self.index.insert(key, seq);
+            return;
+        }
+        let seq = self.head + self.items.len() as u64;
+        match n.coalesce_key() {
+            Some(key) => {
+                self.index.insert(key, seq);
+            }
+            None => {
+                // A Deleted ends coalescing for that key: a later New must not merge into
+                // anything before it.
+                if let Subject::Property { name, .. } = n.subject {
+                    self.index.remove(&CoalesceKey::Property(name));
+                }
+                if let Subject::Child { guid, .. } = n.subject {
+                    self.index.remove(&CoalesceKey::Child(guid));
+                }
+            }
+        }
+        self.items.push_back(Some(n));
+    }
+
+    fn take_all(&mut self) -> Vec<Notification> {
+        self.head += self.items.len() as u64;
+        self.index.clear();
+        self.items.drain(..).flatten().collect()
+    }
+}
+
+impl Sub {
+    pub(crate) fn new(
+        id: SubscriptionId,
+        names: Option<Box<[PropName]>>,
+        target: Target,
+        callback: Callback,
+        stats: Arc<Stats>,
+    ) -> Arc<Sub> {
+        Arc::new(Sub {
+            id,
+            names,
+            active: AtomicBool::new(true),
+            target,
+            queue: Mutex::default(),
+            idle: Condvar::new(),
+            callback: Mutex::new(callback),
+            stats,
+        })
+    }
+
+    pub(crate) fn wants(&self, name: PropName) -> bool {
+        self.names.as_ref().is_none_or(|ns| ns.contains(&name))
+    }
+
+    pub(crate) fn is_active(&self) -> bool {
+        self.active.load(Ordering::Acquire)
+    }
+
+    /// Queues a notification; the caller holds the lock of the object it is about, so the
+    /// notifications of one object are queued in the order of its changes.
+    pub(crate) fn enqueue(self: &Arc<Self>, n: Notification) {
+        if !self.is_active() {
+            return;
+        }
+        let mut q = self.queue.lock();
+        q.push(n);
+        if !q.scheduled {
+            q.scheduled = true;
+            drop(q);
+            let me = self.clone();
+            self.target.submit(Box::new(move || me.deliver()));
+        }
+    }
+
+    /// Delivers what is pending, one batch, on the subscription's executor.
+    fn deliver(self: Arc<Self>) {
+        let batch = {
+            let mut q = self.queue.lock();
+            if !self.is_active() {
+                q.take_all();
+                q.scheduled = false;
+                self.idle.notify_all();
+                return;
+            }
+            q.running_on = Some(std::thread::current().id());
+            q.take_all()
+        };
+        {
+            let mut cb = self.callback.lock();
+            for n in &batch {
+                if !self.is_active() {
+                    break;
+                }
+                let last = matches!(n.subject, Subject::Object);
+                if catch_unwind(AssertUnwindSafe(|| cb(n))).is_err() {
+                    self.stats.panics_caught.fetch_add(1, Ordering::Relaxed);
+                }
+                self.stats.callbacks_run.fetch_add(1, Ordering::Relaxed);
+                if last {
+                    // The object is gone: this subscription ends here.
+                    self.active.store(false, Ordering::Release);
+                }
+            }
+        }
+        let mut q = self.queue.lock();
+        q.running_on = None;
+        if self.is_active() && !q.items.is_empty() {
+            drop(q);
+            let me = self.clone();
+            self.target.submit(Box::new(move || me.deliver()));
+        } else {
+            q.take_all();
+            q.scheduled = false;
+            self.idle.notify_all();
+        }
+    }
+
+    /// Stops delivery. When this returns, the callback is not running and never runs
+    /// again — except when called from inside this subscription's own callback, which then
+    /// finishes normally.
+    pub(crate) fn cancel(&self) {
+        self.active.store(false, Ordering::Release);
+        let me = std::thread::current().id();
+        let mut q = self.queue.lock();
+        while q.running_on.is_some() && q.running_on != Some(me) {
+            self.idle.wait(&mut q);
+        }
+        q.take_all();
+    }
+}
