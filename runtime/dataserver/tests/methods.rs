@@ -1,0 +1,193 @@
+//! Methods: call feedback, immediate / queued / delayed calls, timeouts, periodic work.
+use mocu_dataserver::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+fn vehicle(ds: &DataServer) -> Guid {
+    let v = ds.create_object(Guid::ROOT, ObjectInfo::new("usv1", "usv")).unwrap();
+    ds.set(v, "engine", Value::Bool(false)).unwrap();
+    let ds2 = ds.clone();
+    ds.publish_method_fn(
+        v,
+        MethodSpec::new("start_engine").describe("Starts the engine"),
+        move |_args| {
+            if ds2.get(v, "engine") == Ok(Value::Bool(true)) {
+                return CallOutcome::Refused("engine already running".into());
+            }
+            ds2.set(v, "engine", Value::Bool(true)).unwrap();
+            CallOutcome::Accepted(vec![])
+        },
+    )
+    .unwrap();
+    ds.publish_method_fn(
+        v,
+        MethodSpec::new("arm").param(ParamSpec::new("on", ValueKind::Bool)),
+        |args| CallOutcome::Accepted(vec![args[0].clone()]),
+    )
+    .unwrap();
+    v
+}
+
+#[test]
+fn a_call_is_accepted_then_refused_with_the_modules_reason() {
+    let ds = DataServer::default();
+    let v = vehicle(&ds);
+    assert_eq!(ds.call_wait(v, "start_engine", vec![], None), CallOutcome::Accepted(vec![]));
+    assert_eq!(
+        ds.call_wait(v, "start_engine", vec![], None),
+        CallOutcome::Refused("engine already running".into())
+    );
+    assert_eq!(
+        ds.call_wait(v, "arm", vec![Value::Bool(true)], None),
+        CallOutcome::Accepted(vec![Value::Bool(true)])
+    );
+}
+
+#[test]
+fn missing_objects_methods_and_bad_arguments_have_their_own_outcomes() {
+    let ds = DataServer::default();
+    let v = vehicle(&ds);
+    assert_eq!(ds.call_wait(v, "fly", vec![], None), CallOutcome::NoSuchMethod);
+    assert_eq!(
+        ds.call_wait(Guid::new(999).unwrap(), "arm", vec![], None),
+        CallOutcome::NoSuchObject
+    );
+    match ds.call_wait(v, "arm", vec![Value::Int(1)], None) {
+        CallOutcome::Failed(why) => assert!(why.contains("`on`") && why.contains("bool"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+    match ds.call_wait(v, "arm", vec![], None) {
+        CallOutcome::Failed(why) => assert!(why.contains("takes 1"), "{why}"),
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn methods_are_listed_with_their_specs() {
+    let ds = DataServer::default();
+    let v = vehicle(&ds);
+    let names: Vec<String> = ds.methods(v).unwrap().iter().map(|m| m.name.to_string()).collect();
+    assert_eq!(names, ["arm", "start_engine"]);
+    let arm = &ds.methods(v).unwrap()[0];
+    assert_eq!(arm.params, vec![ParamSpec::new("on", ValueKind::Bool)]);
+    let e = ds
+        .publish_method_fn(v, MethodSpec::new("arm"), |_| CallOutcome::Accepted(vec![]))
+        .unwrap_err();
+    assert!(matches!(e, DsError::MethodExists { .. }));
+}
+
+#[test]
+fn immediate_calls_run_on_the_callers_thread_and_queued_calls_do_not() {
+    let ds = DataServer::default();
+    let o = ds.create_object(Guid::ROOT, ObjectInfo::new("w", "window")).unwrap();
+    let ran_on = Arc::new(Mutex::new(Vec::new()));
+    let r = ran_on.clone();
+    ds.publish_method(o, MethodSpec::new("paint"), move |call: Call| {
+        r.lock().unwrap().push(std::thread::current().id());
+        call.responder.accept(vec![]);
+    })
+    .unwrap();
+    let me = std::thread::current().id();
+    let done_on = Arc::new(Mutex::new(None));
+    let d = done_on.clone();
+    ds.call(o, "paint", vec![], Some(CallOptions::immediate()), move |out| {
+        *d.lock().unwrap() = Some((std::thread::current().id(), out));
+    });
+    assert_eq!(
+        *done_on.lock().unwrap(),
+        Some((me, CallOutcome::Accepted(vec![]))),
+        "answered before call() returned"
+    );
+    assert_eq!(
+        ds.call_wait(o, "paint", vec![], Some(CallOptions::queued())),
+        CallOutcome::Accepted(vec![])
+    );
+    let ran = ran_on.lock().unwrap();
+    assert_eq!(ran[0], me);
+    assert_ne!(ran[1], me);
+}
+
+#[test]
+fn a_delayed_call_runs_after_its_delay() {
+    let ds = DataServer::default();
+    let v = vehicle(&ds);
+    let t0 = Instant::now();
+    let out = ds.call_wait(
+        v,
+        "arm",
+        vec![Value::Bool(false)],
+        Some(CallOptions::delayed(Duration::from_millis(60))),
+    );
+    assert!(out.is_accepted());
+    assert!(t0.elapsed() >= Duration::from_millis(60));
+}
+
+#[test]
+fn a_handler_may_answer_later_from_another_thread_or_time_out() {
+    let ds = DataServer::default();
+    let o = ds.create_object(Guid::ROOT, ObjectInfo::new("mav1", "uav")).unwrap();
+    // Answers after the vehicle "acknowledges", from a protocol thread.
+    ds.publish_method(
+        o,
+        MethodSpec::new("arm").param(ParamSpec::new("on", ValueKind::Bool)),
+        |call: Call| {
+            let on = call.args[0].as_bool().unwrap();
+            let responder = call.responder;
+            std::thread::spawn(move || {
+                std::thread::sleep(Duration::from_millis(if on { 10 } else { 500 }));
+                responder.accept(vec![]);
+            });
+        },
+    )
+    .unwrap();
+    assert!(ds.call_wait(o, "arm", vec![Value::Bool(true)], None).is_accepted());
+    let out = ds.call_wait(
+        o,
+        "arm",
+        vec![Value::Bool(false)],
+        Some(CallOptions::queued().timeout(Duration::from_millis(50))),
+    );
+    assert_eq!(out, CallOutcome::TimedOut);
+}
+
+#[test]
+fn a_handler_that_drops_its_call_or_panics_answers_failed() {
+    let ds = DataServer::default();
+    let o = ds.create_object(Guid::ROOT, ObjectInfo::new("m", "t")).unwrap();
+    ds.publish_method(o, MethodSpec::new("forget"), |_call: Call| {}).unwrap();
+    ds.publish_method(o, MethodSpec::new("boom"), |_call: Call| panic!("module bug")).unwrap();
+    assert!(matches!(ds.call_wait(o, "forget", vec![], None), CallOutcome::Failed(_)));
+    assert!(matches!(ds.call_wait(o, "boom", vec![], None), CallOutcome::Failed(_)));
+    assert!(matches!(
+        ds.call_wait(o, "boom", vec![], Some(CallOptions::immediate())),
+        CallOutcome::Failed(_)
+    ));
+    assert!(
+        ds.call_wait(o, "forget", vec![], None) != CallOutcome::NoSuchObject,
+        "the server lives on"
+    );
+}
+
+#[test]
+fn periodic_work_rearms_a_delayed_call_without_a_thread_of_its_own() {
+    fn tick(ds: DataServer, ex: Executor, n: Arc<AtomicUsize>) {
+        if n.fetch_add(1, Ordering::SeqCst) + 1 < 5 {
+            let (d, e) = (ds.clone(), ex.clone());
+            ds.run_after(Duration::from_millis(5), Some(&ex), move || tick(d, e, n));
+        }
+    }
+    let ds = DataServer::default();
+    let ex = ds.serial_executor();
+    let n = Arc::new(AtomicUsize::new(0));
+    tick(ds.clone(), ex, n.clone());
+    let t0 = Instant::now();
+    while n.load(Ordering::SeqCst) < 5 {
+        assert!(t0.elapsed() < Duration::from_secs(10));
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    ds.quiesce();
+    std::thread::sleep(Duration::from_millis(30));
+    assert_eq!(n.load(Ordering::SeqCst), 5, "stops when no longer re-armed");
+    assert_eq!(ds.pending_timers(), 0);
+}
