@@ -75,6 +75,7 @@ impl Pending {
         if n.kind == Kind::Changed
             && let Some(key) = n.coalesce_key()
             && let Some(&seq) = self.index.get(&key)
+            && !self.is_pending_child_new(key, seq)
         {
             // Coalesce: the earlier undelivered entry goes, the latest value moves to the
             // back (after every change that happened before it), keeping its New-ness.
@@ -103,6 +104,14 @@ impl Pending {
             }
         }
         self.items.push_back(Some(n));
+    }
+
+    /// A child's undelivered New must stay where it is: the positions in the child
+    /// notifications queued after it count that child, so moving it to the back would
+    /// make them wrong. A rename behind it is queued as a Changed of its own.
+    fn is_pending_child_new(&self, key: CoalesceKey, seq: u64) -> bool {
+        matches!(key, CoalesceKey::Child(_))
+            && self.items[(seq - self.head) as usize].as_ref().is_some_and(|n| n.kind == Kind::New)
     }
 
     fn take_all(&mut self) -> Vec<Notification> {
