@@ -249,9 +249,10 @@ impl DataServer {
             os.alive = false;
             stack.extend(os.children.iter().rev().copied());
             let gone = Notification { object: g, kind: Kind::Deleted, subject: Subject::Object };
+            // Each subscription leaves the registry once this is delivered (or when
+            // unsubscribed before that), so unsubscribe can still stop it until then.
             for s in os.prop_subs.drain(..).chain(os.child_subs.drain(..)) {
                 s.enqueue(gone.clone());
-                self.inner.subs.pin().remove(&s.id);
             }
             os.methods.clear();
             drop(guard);
@@ -473,7 +474,13 @@ impl DataServer {
             Topic::Properties { names, .. } => names.as_ref().map(|n| n.clone().into_boxed_slice()),
             Topic::Children { .. } => None,
         };
-        let sub = Sub::new(id, names, target, callback, self.inner.pool.stats.clone());
+        let registry = Arc::downgrade(&self.inner);
+        let on_end = Box::new(move || {
+            if let Some(inner) = registry.upgrade() {
+                inner.subs.pin().remove(&id);
+            }
+        });
+        let sub = Sub::new(id, names, target, callback, self.inner.pool.stats.clone(), on_end);
         // Children change shape under the structure lock; take it so the initial list and
         // later changes cannot interleave.
         let _shape = matches!(topic, Topic::Children { .. }).then(|| self.inner.structure.lock());
@@ -503,8 +510,10 @@ impl DataServer {
                 os.child_subs.push(sub.clone());
             }
         }
-        drop(os);
+        // Registered before the object's lock is released, so a delete that follows
+        // cannot end the subscription before it is in the registry.
         self.inner.subs.pin().insert(id, (guid, sub));
+        drop(os);
         Ok(id)
     }
 

@@ -57,6 +57,9 @@ pub(crate) struct Sub {
     idle: Condvar,
     callback: Mutex<Callback>,
     stats: Arc<Stats>,
+    /// Runs once the object's `Deleted` has been delivered: the subscription leaves the
+    /// registry only then, so `unsubscribe` can still stop the notifications before it.
+    on_end: Mutex<Option<Box<dyn FnOnce() + Send>>>,
 }
 
 #[derive(Default)]
@@ -128,6 +131,7 @@ impl Sub {
         target: Target,
         callback: Callback,
         stats: Arc<Stats>,
+        on_end: Box<dyn FnOnce() + Send>,
     ) -> Arc<Sub> {
         Arc::new(Sub {
             id,
@@ -138,6 +142,7 @@ impl Sub {
             idle: Condvar::new(),
             callback: Mutex::new(callback),
             stats,
+            on_end: Mutex::new(Some(on_end)),
         })
     }
 
@@ -192,6 +197,9 @@ impl Sub {
                 if last {
                     // The object is gone: this subscription ends here.
                     self.active.store(false, Ordering::Release);
+                    if let Some(end) = self.on_end.lock().take() {
+                        end();
+                    }
                 }
             }
         }
