@@ -1,0 +1,208 @@
+//! The registry of module kinds and the host that starts and stops them in order.
+
+use crate::context::{HostEvent, ModuleContext, panic_message};
+use crate::spec::ModuleSpec;
+use crossbeam_channel::{Receiver, Sender};
+use mocu_dataserver::{DataServer, Value};
+use std::collections::BTreeMap;
+use std::fmt;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+
+/// A module: started once with its context, stopped once. `start` should return quickly:
+/// periodic work goes to `ctx.ds.run_after` on `ctx.executor`, blocking I/O to
+/// `ctx.spawn_thread`.
+pub trait Module: Send {
+    fn start(&mut self, ctx: &ModuleContext) -> Result<(), String>;
+    /// Stops the module's work (timers, threads). Objects it published may stay.
+    fn stop(&mut self) {}
+}
+
+/// Makes a module of one kind from its spec (settings are checked here or in `start`).
+pub type Factory = Box<dyn Fn(&ModuleSpec) -> Result<Box<dyn Module>, String> + Send + Sync>;
+
+/// Module kinds by name. Registering a kind again replaces it: a profile's project can swap
+/// any core piece (simulator, MAVLink, later the window manager) for its own.
+#[derive(Default)]
+pub struct Registry {
+    kinds: BTreeMap<String, Factory>,
+}
+
+impl Registry {
+    pub fn new() -> Registry {
+        Registry::default()
+    }
+
+    pub fn register(
+        &mut self,
+        kind: &str,
+        factory: impl Fn(&ModuleSpec) -> Result<Box<dyn Module>, String> + Send + Sync + 'static,
+    ) {
+        self.kinds.insert(kind.to_string(), Box::new(factory));
+    }
+
+    pub fn kinds(&self) -> impl Iterator<Item = &str> {
+        self.kinds.keys().map(|k| k.as_str())
+    }
+}
+
+/// Why a module did not start.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StartError {
+    UnknownKind { module: String, kind: String },
+    DuplicateName { module: String },
+    Failed { module: String, reason: String },
+    Panicked { module: String, message: String },
+}
+
+impl fmt::Display for StartError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            StartError::UnknownKind { module, kind } => {
+                write!(f, "module `{module}`: no module kind `{kind}` is registered")
+            }
+            StartError::DuplicateName { module } => {
+                write!(f, "module `{module}`: another module already has this name")
+            }
+            StartError::Failed { module, reason } => {
+                write!(f, "module `{module}` failed to start: {reason}")
+            }
+            StartError::Panicked { module, message } => {
+                write!(f, "module `{module}` panicked while starting: {message}")
+            }
+        }
+    }
+}
+
+struct Running {
+    module: Box<dyn Module>,
+    ctx: ModuleContext,
+}
+
+/// Starts modules in order, isolates their failures, stops them in reverse order.
+pub struct ModuleHost {
+    ds: DataServer,
+    registry: Registry,
+    running: Vec<Running>,
+    tx: Sender<HostEvent>,
+    rx: Receiver<HostEvent>,
+}
+
+impl ModuleHost {
+    pub fn new(ds: DataServer, registry: Registry) -> ModuleHost {
+        let (tx, rx) = crossbeam_channel::unbounded();
+        ModuleHost { ds, registry, running: Vec::new(), tx, rx }
+    }
+
+    pub fn dataserver(&self) -> &DataServer {
+        &self.ds
+    }
+
+    /// The host's and the modules' reports, in order. Every clone sees each event once.
+    pub fn events(&self) -> Receiver<HostEvent> {
+        self.rx.clone()
+    }
+
+    /// Starts each module in order. One that fails is reported (an event and an entry in
+    /// the returned list) and the rest still start.
+    pub fn start_all(&mut self, specs: &[ModuleSpec]) -> Vec<StartError> {
+        specs.iter().filter_map(|s| self.start(s).err()).collect()
+    }
+
+    /// Starts one module.
+    pub fn start(&mut self, spec: &ModuleSpec) -> Result<(), StartError> {
+        let result = self.try_start(spec);
+        if let Err(e) = &result {
+            let event = match e {
+                StartError::Panicked { module, message } => {
+                    HostEvent::Panicked { module: module.clone(), message: message.clone() }
+                }
+                other => HostEvent::Failed { module: spec.name.clone(), reason: other.to_string() },
+            };
+            let _ = self.tx.send(event);
+        }
+        result
+    }
+
+    fn try_start(&mut self, spec: &ModuleSpec) -> Result<(), StartError> {
+        let module = spec.name.clone();
+        if self.running.iter().any(|r| *r.ctx.name == *spec.name) {
+            return Err(StartError::DuplicateName { module });
+        }
+        let Some(factory) = self.registry.kinds.get(&spec.kind) else {
+            return Err(StartError::UnknownKind { module, kind: spec.kind.clone() });
+        };
+        let status = crate::world::ensure_path(&self.ds, &["modules", &spec.name], "module")
+            .map_err(|e| StartError::Failed { module: module.clone(), reason: e.to_string() })?;
+        let _ = self.ds.set(status, "kind", Value::str(&spec.kind));
+        let _ = self.ds.set(status, "state", Value::str("starting"));
+        let ctx = ModuleContext::new(
+            &spec.name,
+            self.ds.clone(),
+            self.ds.serial_executor(),
+            status,
+            self.tx.clone(),
+        );
+        let fail = |state: &str, why: &str| {
+            let _ = self.ds.set(status, "state", Value::str(state));
+            let _ = self.ds.set(status, "error", Value::str(why));
+        };
+        let made = catch_unwind(AssertUnwindSafe(|| factory(spec)));
+        let mut m = match made {
+            Ok(Ok(m)) => m,
+            Ok(Err(reason)) => {
+                fail("failed", &reason);
+                return Err(StartError::Failed { module, reason });
+            }
+            Err(p) => {
+                let message = panic_message(&*p);
+                fail("panicked", &message);
+                return Err(StartError::Panicked { module, message });
+            }
+        };
+        match catch_unwind(AssertUnwindSafe(|| m.start(&ctx))) {
+            Ok(Ok(())) => {}
+            Ok(Err(reason)) => {
+                fail("failed", &reason);
+                stop_quietly(&mut m);
+                return Err(StartError::Failed { module, reason });
+            }
+            Err(p) => {
+                let message = panic_message(&*p);
+                fail("panicked", &message);
+                stop_quietly(&mut m);
+                return Err(StartError::Panicked { module, message });
+            }
+        }
+        let _ = self.ds.set(status, "state", Value::str("running"));
+        let _ = self.tx.send(HostEvent::Started { module, kind: spec.kind.clone() });
+        self.running.push(Running { module: m, ctx });
+        Ok(())
+    }
+
+    /// Names of the modules that started, in start order.
+    pub fn running(&self) -> Vec<String> {
+        self.running.iter().map(|r| r.ctx.name.to_string()).collect()
+    }
+
+    /// Stops every module, last started first. A panic in one `stop` is reported and the
+    /// others still stop.
+    pub fn stop_all(&mut self) {
+        while let Some(mut r) = self.running.pop() {
+            let ok = r.ctx.guard(|| r.module.stop());
+            if ok {
+                let _ = self.ds.set(r.ctx.status, "state", Value::str("stopped"));
+                let _ = self.tx.send(HostEvent::Stopped { module: r.ctx.name.to_string() });
+            }
+        }
+    }
+}
+
+impl Drop for ModuleHost {
+    fn drop(&mut self) {
+        self.stop_all();
+    }
+}
+
+fn stop_quietly(m: &mut Box<dyn Module>) {
+    let _ = catch_unwind(AssertUnwindSafe(|| m.stop()));
+}

@@ -1,0 +1,598 @@
+//! The simulator: its world, its publication in the DataServer, its methods and its module.
+
+use crate::camera;
+use crate::rng::Rng;
+use crate::vehicle::{Camera, Guidance, Vehicle, VehicleKind};
+use mocu_dataserver::{
+    Call, CallOutcome, DataServer, DsError, Guid, MethodSpec, ObjectInfo, ParamSpec, Value,
+    ValueKind,
+};
+use mocu_host::world::{self, RouteFrame, boolean, float, float_in, int, string};
+use mocu_host::{Module, ModuleContext, ModuleSpec, Registry};
+use parking_lot::Mutex;
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// Settings of the simulator (the `[[modules]]` keys of kind `sim`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimConfig {
+    pub seed: u64,
+    pub usv: usize,
+    pub ugv: usize,
+    pub uav: usize,
+    /// Seconds between two vehicles appearing (discovery over time); the first appears at
+    /// once.
+    pub appear_every: f64,
+    /// Simulation steps per second of real time (the module's tick).
+    pub rate_hz: f64,
+    pub camera_fps: f64,
+    pub camera_width: u32,
+    pub camera_height: u32,
+    /// Latitude and longitude of the local origin (x = y = 0).
+    pub origin: (f64, f64),
+}
+
+impl Default for SimConfig {
+    fn default() -> SimConfig {
+        SimConfig {
+            seed: 1,
+            usv: 2,
+            ugv: 1,
+            uav: 1,
+            appear_every: 1.0,
+            rate_hz: 20.0,
+            camera_fps: 10.0,
+            camera_width: 64,
+            camera_height: 48,
+            origin: (32.7100, -117.2400),
+        }
+    }
+}
+
+impl SimConfig {
+    pub fn from_spec(spec: &ModuleSpec) -> Result<SimConfig, String> {
+        let d = SimConfig::default();
+        let count = |k: &str, def: usize| -> Result<usize, String> {
+            let n = spec.i64_or(k, def as i64).map_err(|e| e.to_string())?;
+            usize::try_from(n).map_err(|_| format!("module `{}`: `{k}` must be >= 0", spec.name))
+        };
+        let e = |r: Result<f64, mocu_host::SpecError>| r.map_err(|e| e.to_string());
+        let cfg = SimConfig {
+            seed: spec.i64_or("seed", d.seed as i64).map_err(|e| e.to_string())? as u64,
+            usv: count("usv", d.usv)?,
+            ugv: count("ugv", d.ugv)?,
+            uav: count("uav", d.uav)?,
+            appear_every: e(spec.f64_or("appear_every", d.appear_every))?,
+            rate_hz: e(spec.f64_or("rate_hz", d.rate_hz))?,
+            camera_fps: e(spec.f64_or("camera_fps", d.camera_fps))?,
+            camera_width: count("camera_width", d.camera_width as usize)? as u32,
+            camera_height: count("camera_height", d.camera_height as usize)? as u32,
+            origin: (
+                e(spec.f64_or("origin_lat", d.origin.0))?,
+                e(spec.f64_or("origin_lon", d.origin.1))?,
+            ),
+        };
+        if !(cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0) {
+            return Err(format!("module `{}`: `rate_hz` must be in (0, 1000]", spec.name));
+        }
+        if cfg.camera_width == 0
+            || cfg.camera_height == 0
+            || cfg.camera_width > 1024
+            || cfg.camera_height > 1024
+        {
+            return Err(format!("module `{}`: camera size must be 1..=1024", spec.name));
+        }
+        Ok(cfg)
+    }
+}
+
+struct World {
+    cfg: SimConfig,
+    rng: Rng,
+    time: f64,
+    pending: VecDeque<(f64, VehicleKind, String)>,
+    vehicles: Vec<Vehicle>,
+}
+
+/// A handle on a running simulation. Cheap to clone.
+#[derive(Clone)]
+pub struct Sim {
+    world: Arc<Mutex<World>>,
+    ctx: ModuleContext,
+    root: Guid,
+}
+
+impl Sim {
+    /// Publishes `root.vehicles` (if absent); vehicles appear as [`Sim::step`] advances time.
+    pub fn new(ctx: ModuleContext, cfg: SimConfig) -> Result<Sim, DsError> {
+        let root = world::vehicles(&ctx.ds)?;
+        let mut pending = VecDeque::new();
+        let mut k = 0;
+        let n = cfg.usv.max(cfg.ugv).max(cfg.uav);
+        for i in 0..n {
+            for (kind, count) in [
+                (VehicleKind::Usv, cfg.usv),
+                (VehicleKind::Ugv, cfg.ugv),
+                (VehicleKind::Uav, cfg.uav),
+            ] {
+                if i < count {
+                    pending.push_back((
+                        k as f64 * cfg.appear_every,
+                        kind,
+                        format!("{}{}", kind.type_name(), i + 1),
+                    ));
+                    k += 1;
+                }
+            }
+        }
+        let rng = Rng::new(cfg.seed);
+        let world = World { cfg, rng, time: 0.0, pending, vehicles: Vec::new() };
+        Ok(Sim { world: Arc::new(Mutex::new(world)), ctx, root })
+    }
+
+    /// Simulated seconds so far.
+    pub fn time(&self) -> f64 {
+        self.world.lock().time
+    }
+
+    /// Names of the vehicles that have appeared, in order.
+    pub fn vehicle_names(&self) -> Vec<String> {
+        self.world.lock().vehicles.iter().map(|v| v.name.clone()).collect()
+    }
+
+    /// A scenario hook: sets a vehicle's fuel (0..1) now.
+    pub fn set_fuel(&self, name: &str, fuel: f64) {
+        let mut w = self.world.lock();
+        let origin = w.cfg.origin;
+        if let Some(v) = w.vehicles.iter_mut().find(|v| v.name == name) {
+            v.fuel = fuel.clamp(0.0, 1.0);
+            if v.fuel == 0.0 {
+                v.engine = false;
+            }
+            publish(&self.ctx.ds, v, origin);
+        }
+    }
+
+    /// Advances the simulation by `dt` seconds: discovery, kinematics, publication, camera
+    /// frames. Deterministic: the same seed and the same steps give the same world.
+    pub fn step(&self, dt: f64) {
+        let ds = &self.ctx.ds;
+        let mut guard = self.world.lock();
+        let w = &mut *guard;
+        w.time += dt;
+        while w.pending.front().is_some_and(|p| p.0 <= w.time + 1e-9) {
+            let (_, kind, name) = w.pending.pop_front().expect("checked above");
+            match self.spawn(w, kind, &name) {
+                Ok(v) => w.vehicles.push(v),
+                Err(e) => {
+                    self.ctx.report(mocu_host::Level::Error, format!("cannot publish {name}: {e}"))
+                }
+            }
+        }
+        let origin = w.cfg.origin;
+        let (cw, ch, fps) = (w.cfg.camera_width, w.cfg.camera_height, w.cfg.camera_fps);
+        let time = w.time;
+        for v in &mut w.vehicles {
+            let goal = (
+                ds.try_get(v.nav, "goal_throttle".into()).and_then(|x| x.as_f64()).unwrap_or(0.0),
+                ds.try_get(v.nav, "goal_rudder".into()).and_then(|x| x.as_f64()).unwrap_or(0.0),
+            );
+            let noise = w.rng.unit();
+            v.step(dt, goal, noise);
+            publish(ds, v, origin);
+            for c in &mut v.cameras {
+                if fps > 0.0 && time + 1e-9 >= c.next_due {
+                    c.next_due += 1.0 / fps;
+                    c.frames += 1;
+                    let _ = ds.set(c.listener, "frames", Value::Int(c.frames as i64));
+                    if ds.receivers(c.listener).is_ok_and(|r| !r.is_empty()) {
+                        let tint = match v.kind {
+                            VehicleKind::Usv => [20, 60, 120],
+                            VehicleKind::Ugv => [110, 90, 50],
+                            VehicleKind::Uav => [60, 120, 60],
+                        };
+                        let px = camera::render(cw, ch, v.heading, v.pitch, c.frames, tint);
+                        let _ = ds.send(
+                            c.listener,
+                            vec![
+                                Value::Bytes(px.into()),
+                                Value::Int(cw as i64),
+                                Value::Int(ch as i64),
+                                Value::Int(c.frames as i64),
+                            ],
+                        );
+                    }
+                }
+            }
+        }
+        let _ = ds.set(self.ctx.status, "time", Value::Float(w.time));
+        let _ = ds.set(self.ctx.status, "vehicles", Value::Int(w.vehicles.len() as i64));
+    }
+
+    fn spawn(&self, w: &mut World, kind: VehicleKind, name: &str) -> Result<Vehicle, DsError> {
+        let ds = &self.ctx.ds;
+        let ex = &self.ctx.executor;
+        let (x, y) = (w.rng.range(-150.0, 150.0), w.rng.range(-150.0, 150.0));
+        let heading = w.rng.range(0.0, 360.0);
+        let fuel = w.rng.range(0.55, 1.0);
+        let info = ObjectInfo::new(name, kind.type_name()).subtype(kind.subtype());
+        let guid = ds.create_object(self.root, info)?;
+        let nav = ds.create_object(guid, ObjectInfo::new("nav", "nav"))?;
+        let cams = ds.create_object(guid, ObjectInfo::new("cameras", "cameras"))?;
+        let mut cameras = Vec::new();
+        let names: &[&'static str] =
+            if kind == VehicleKind::Uav { &["drive", "payload"] } else { &["drive"] };
+        for &cname in names {
+            let l = ds.create_listener(cams, cname)?;
+            world::create_props(
+                ds,
+                l,
+                vec![
+                    ("width", Value::Int(w.cfg.camera_width as i64), int("px")),
+                    ("height", Value::Int(w.cfg.camera_height as i64), int("px")),
+                    ("fps", Value::Float(w.cfg.camera_fps), float("Hz")),
+                    ("frames", Value::Int(0), int("frames")),
+                    ("format", Value::str("rgb8"), string()),
+                ],
+            )?;
+            cameras.push(Camera { listener: l, frames: 0, next_due: w.time });
+        }
+        let v = Vehicle {
+            name: name.to_string(),
+            kind,
+            guid,
+            nav,
+            cameras,
+            x,
+            y,
+            alt: 0.0,
+            target_alt: 30.0,
+            heading,
+            speed: 0.0,
+            roll: 0.0,
+            pitch: 0.0,
+            fuel,
+            armed: false,
+            engine: false,
+            control: String::new(),
+            guidance: Guidance::Manual,
+            home: (x, y),
+            link: 1.0,
+        };
+        let mut props = vec![
+            ("name", Value::str(name), string()),
+            (
+                "fuel",
+                Value::Float(fuel),
+                float_in("fraction", 0.0, 1.0).describe("fuel or battery, 0..1"),
+            ),
+        ];
+        if kind != VehicleKind::Usv {
+            props.push(("battery_v", Value::Float(0.0), float("V")));
+        }
+        props.extend([
+            ("armed", Value::Bool(false), boolean()),
+            ("engine", Value::Bool(false), boolean()),
+            ("link", Value::Float(1.0), float_in("fraction", 0.0, 1.0).describe("link quality")),
+            ("link_lost", Value::Bool(false), boolean()),
+            ("stale", Value::Bool(false), boolean()),
+            ("mode", Value::str("manual"), string()),
+            ("control", Value::str(""), string().describe("operator holding control")),
+        ]);
+        world::create_props(ds, guid, props)?;
+        world::create_props(
+            ds,
+            nav,
+            vec![
+                ("speed", Value::Float(0.0), float("m/s")),
+                ("heading", Value::Float(heading), float_in("deg", 0.0, 360.0)),
+                ("x", Value::Float(x), float("m")),
+                ("y", Value::Float(y), float("m")),
+                ("lat", Value::Float(0.0), float_in("deg", -90.0, 90.0)),
+                ("lon", Value::Float(0.0), float_in("deg", -180.0, 180.0)),
+                ("alt", Value::Float(0.0), float("m")),
+                ("roll", Value::Float(0.0), float("deg")),
+                ("pitch", Value::Float(0.0), float("deg")),
+                (
+                    "goal_throttle",
+                    Value::Float(0.0),
+                    float_in("%", -100.0, 100.0).describe("operator goal"),
+                ),
+                (
+                    "goal_rudder",
+                    Value::Float(0.0),
+                    float_in("deg", -30.0, 30.0).describe("operator goal"),
+                ),
+            ],
+        )?;
+        publish(ds, &v, w.cfg.origin);
+        let origin = w.cfg.origin;
+        let frame = RouteFrame::Local(Some(Arc::new(move |x, y| to_global(origin, x, y))));
+        let routes = world::publish_routes(ds, ex, guid, frame.clone())?;
+        let r = 60.0;
+        let square = [(x + r, y), (x + r, y + r), (x, y + r), (x, y)];
+        world::create_route(ds, ex, routes, "patrol", frame, &square)?;
+        self.publish_methods(guid)?;
+        Ok(v)
+    }
+
+    fn publish_methods(&self, guid: Guid) -> Result<(), DsError> {
+        use ValueKind::{Bool, Float, Guid as G, String as S};
+        let p = ParamSpec::new;
+        self.method(guid, MethodSpec::new("arm").param(p("on", Bool)), |_, v, a| {
+            let on = a[0].as_bool().unwrap_or(false);
+            v.armed = on;
+            if !on {
+                v.engine = false;
+            }
+            CallOutcome::Accepted(vec![])
+        })?;
+        self.method(guid, MethodSpec::new("start_engine"), |_, v, _| {
+            if v.engine {
+                CallOutcome::Refused("engine already running".into())
+            } else if v.fuel <= 0.0 {
+                CallOutcome::Refused(format!("no fuel: {} cannot start its engine", v.name))
+            } else if !v.armed {
+                CallOutcome::Refused("not armed: arm before starting the engine".into())
+            } else {
+                v.engine = true;
+                CallOutcome::Accepted(vec![])
+            }
+        })?;
+        self.method(guid, MethodSpec::new("stop"), |sim, v, _| {
+            v.guidance = Guidance::Manual;
+            let _ = sim.ctx.ds.set(v.nav, "goal_throttle", Value::Float(0.0));
+            let _ = sim.ctx.ds.set(v.nav, "goal_rudder", Value::Float(0.0));
+            CallOutcome::Accepted(vec![])
+        })?;
+        self.method(guid, MethodSpec::new("set_mode").param(p("mode", S)), |_, v, a| {
+            match a[0].as_str().unwrap_or("") {
+                "manual" => v.guidance = Guidance::Manual,
+                "hold" => v.guidance = Guidance::Hold,
+                "rtl" => v.guidance = Guidance::Point { x: v.home.0, y: v.home.1, home: true },
+                "route" if matches!(v.guidance, Guidance::Route { .. }) => {}
+                "route" => return CallOutcome::Refused("no route assigned".into()),
+                "guided" => {
+                    return CallOutcome::Refused("guided mode starts with goto(x, y, alt)".into());
+                }
+                other => {
+                    return CallOutcome::Refused(format!(
+                        "unknown mode `{other}` (manual, hold, rtl, route, guided)"
+                    ));
+                }
+            }
+            CallOutcome::Accepted(vec![])
+        })?;
+        self.method(
+            guid,
+            MethodSpec::new("goto")
+                .param(p("x", Float))
+                .param(p("y", Float))
+                .param(p("alt", Float)),
+            |_, v, a| {
+                let (x, y, alt) = (
+                    a[0].as_f64().unwrap_or(0.0),
+                    a[1].as_f64().unwrap_or(0.0),
+                    a[2].as_f64().unwrap_or(0.0),
+                );
+                if !v.engine {
+                    return CallOutcome::Refused("engine is off".into());
+                }
+                if v.kind == VehicleKind::Uav {
+                    if !(5.0..=120.0).contains(&alt) {
+                        return CallOutcome::Refused(format!(
+                            "altitude {alt} m is outside 5..120 m"
+                        ));
+                    }
+                    v.target_alt = alt;
+                }
+                v.guidance = Guidance::Point { x, y, home: false };
+                CallOutcome::Accepted(vec![])
+            },
+        )?;
+        self.method(guid, MethodSpec::new("return_home"), |_, v, _| {
+            if !v.engine {
+                return CallOutcome::Refused("engine is off".into());
+            }
+            v.guidance = Guidance::Point { x: v.home.0, y: v.home.1, home: true };
+            CallOutcome::Accepted(vec![])
+        })?;
+        self.method(
+            guid,
+            MethodSpec::new("request_control").param(p("operator", S)),
+            |_, v, a| {
+                let op = a[0].as_str().unwrap_or("");
+                if op.is_empty() {
+                    CallOutcome::Refused("an operator name is needed".into())
+                } else if !v.control.is_empty() && v.control != op {
+                    CallOutcome::Refused(format!("control held by {}", v.control))
+                } else {
+                    v.control = op.to_string();
+                    CallOutcome::Accepted(vec![])
+                }
+            },
+        )?;
+        self.method(
+            guid,
+            MethodSpec::new("release_control").param(p("operator", S)),
+            |_, v, a| {
+                let op = a[0].as_str().unwrap_or("");
+                if v.control != op {
+                    CallOutcome::Refused(format!("{op} does not hold control"))
+                } else {
+                    v.control.clear();
+                    CallOutcome::Accepted(vec![])
+                }
+            },
+        )?;
+        self.method(guid, MethodSpec::new("assign_route").param(p("route", G)), |sim, v, a| {
+            let ds = &sim.ctx.ds;
+            let Some(route) = a[0].as_guid() else {
+                return CallOutcome::Failed("not a GUID".into());
+            };
+            let Ok(info) = ds.info(route) else {
+                return CallOutcome::Failed("no such route".into());
+            };
+            if &*info.kind != "route" {
+                return CallOutcome::Failed(format!(
+                    "`{}` is a {}, not a route",
+                    info.name, info.kind
+                ));
+            }
+            let points: Vec<(f64, f64)> = world::route_waypoints(ds, route)
+                .into_iter()
+                .filter_map(|wp| world::pair(ds, wp, "x", "y"))
+                .collect();
+            if points.is_empty() {
+                return CallOutcome::Refused(format!("route `{}` has no waypoints", info.name));
+            }
+            v.guidance = Guidance::Route { route, points, next: 0 };
+            let _ = ds.set(v.guid, "route", Value::Guid(route));
+            CallOutcome::Accepted(vec![])
+        })?;
+        Ok(())
+    }
+
+    /// Publishes a vehicle method whose handler runs on the simulator's executor with the
+    /// world locked, then republishes the vehicle and records the call and its feedback.
+    fn method(
+        &self,
+        guid: Guid,
+        spec: MethodSpec,
+        f: impl Fn(&Sim, &mut Vehicle, &[Value]) -> CallOutcome + Send + Sync + 'static,
+    ) -> Result<(), DsError> {
+        let sim = self.clone();
+        let method = spec.name;
+        self.ctx.ds.publish_method_on(&self.ctx.executor, guid, spec, move |call: Call| {
+            let mut w = sim.world.lock();
+            let origin = w.cfg.origin;
+            let Some(v) = w.vehicles.iter_mut().find(|v| v.guid == call.object) else {
+                call.responder.reply(CallOutcome::NoSuchObject);
+                return;
+            };
+            sim.ctx.record(
+                "call",
+                vec![
+                    ("object", Value::str(&v.name)),
+                    ("method", Value::str(method.as_str())),
+                    ("args", Value::List(call.args.clone())),
+                ],
+            );
+            let outcome = f(&sim, v, &call.args);
+            publish(&sim.ctx.ds, v, origin);
+            let reason = match &outcome {
+                CallOutcome::Refused(r) | CallOutcome::Failed(r) => r.clone(),
+                _ => String::new(),
+            };
+            sim.ctx.record(
+                "feedback",
+                vec![
+                    ("object", Value::str(&v.name)),
+                    ("method", Value::str(method.as_str())),
+                    ("outcome", Value::str(outcome.label())),
+                    ("reason", Value::str(&reason)),
+                ],
+            );
+            drop(w);
+            call.responder.reply(outcome);
+        })
+    }
+}
+
+fn to_global(origin: (f64, f64), x: f64, y: f64) -> (f64, f64) {
+    let lat = origin.0 + y / 111_320.0;
+    let lon = origin.1 + x / (111_320.0 * origin.0.to_radians().cos());
+    (lat, lon)
+}
+
+/// Writes a vehicle's state to the DataServer (equal values notify nobody).
+fn publish(ds: &DataServer, v: &Vehicle, origin: (f64, f64)) {
+    let (lat, lon) = to_global(origin, v.x, v.y);
+    let g = v.guid;
+    let _ = ds.set(g, "fuel", Value::Float(v.fuel));
+    if v.kind == VehicleKind::Ugv {
+        let _ = ds.set(g, "battery_v", Value::Float(21.0 + 4.2 * v.fuel));
+    } else if v.kind == VehicleKind::Uav {
+        let _ = ds.set(g, "battery_v", Value::Float(13.2 + 3.6 * v.fuel));
+    }
+    let _ = ds.set(g, "armed", Value::Bool(v.armed));
+    let _ = ds.set(g, "engine", Value::Bool(v.engine));
+    let _ = ds.set(g, "link", Value::Float(v.link));
+    let _ = ds.set(g, "link_lost", Value::Bool(v.link < 0.05));
+    let _ = ds.set(g, "stale", Value::Bool(v.link < 0.05));
+    let _ = ds.set(g, "mode", Value::str(v.mode()));
+    let _ = ds.set(g, "control", Value::str(&v.control));
+    let n = v.nav;
+    let _ = ds.set(n, "speed", Value::Float(v.speed));
+    let _ = ds.set(n, "heading", Value::Float(v.heading));
+    let _ = ds.set(n, "x", Value::Float(v.x));
+    let _ = ds.set(n, "y", Value::Float(v.y));
+    let _ = ds.set(n, "lat", Value::Float(lat));
+    let _ = ds.set(n, "lon", Value::Float(lon));
+    let _ = ds.set(n, "alt", Value::Float(v.alt));
+    let _ = ds.set(n, "roll", Value::Float(v.roll));
+    let _ = ds.set(n, "pitch", Value::Float(v.pitch));
+    if let Guidance::Route { next, .. } = &v.guidance {
+        let _ = ds.set(g, "route_next", Value::Int(*next as i64));
+    }
+}
+
+/// The simulator as a module: ticks [`Sim::step`] at `rate_hz` on its serial executor,
+/// with a fixed `dt`, catching up if a tick was late.
+pub struct SimModule {
+    cfg: SimConfig,
+    sim: Option<Sim>,
+    running: Arc<AtomicBool>,
+}
+
+impl SimModule {
+    pub fn new(cfg: SimConfig) -> SimModule {
+        SimModule { cfg, sim: None, running: Arc::new(AtomicBool::new(false)) }
+    }
+
+    /// The running simulation (after `start`).
+    pub fn sim(&self) -> Option<&Sim> {
+        self.sim.as_ref()
+    }
+}
+
+impl Module for SimModule {
+    fn start(&mut self, ctx: &ModuleContext) -> Result<(), String> {
+        let sim = Sim::new(ctx.clone(), self.cfg.clone()).map_err(|e| e.to_string())?;
+        self.running.store(true, Ordering::SeqCst);
+        let period = Duration::from_secs_f64(1.0 / self.cfg.rate_hz);
+        tick(sim.clone(), self.running.clone(), Instant::now(), 0, period);
+        self.sim = Some(sim);
+        Ok(())
+    }
+
+    fn stop(&mut self) {
+        self.running.store(false, Ordering::SeqCst);
+    }
+}
+
+fn tick(sim: Sim, running: Arc<AtomicBool>, t0: Instant, n: u64, period: Duration) {
+    let due = t0 + period.mul_f64((n + 1) as f64);
+    let delay = due.saturating_duration_since(Instant::now());
+    let ds = sim.ctx.ds.clone();
+    let ex = sim.ctx.executor.clone();
+    ds.run_after(delay, Some(&ex), move || {
+        if !running.load(Ordering::SeqCst) {
+            return;
+        }
+        let ok = sim.ctx.guard(|| sim.step(period.as_secs_f64()));
+        if ok {
+            tick(sim, running, t0, n + 1, period);
+        }
+    });
+}
+
+/// Registers the kind `sim`.
+pub fn register(registry: &mut Registry) {
+    registry.register("sim", |spec| {
+        let cfg = SimConfig::from_spec(spec)?;
+        Ok(Box::new(SimModule::new(cfg)) as Box<dyn Module>)
+    });
+}
