@@ -1,13 +1,116 @@
-//! `mocu check` (owned by the language front end work).
+//! `mocu check [--format human|json|sarif] [--deny warnings] PATH...`: lint layouts, profiles
+//! and schemas, or folders of them. Exit 0: no errors; 1: errors (or warnings with
+//! `--deny warnings`); 2: usage or I/O error. The contract is in docs/language.md.
+
+use mocu_language::{FileKind, FsLoader, Severity, SourceLoader, SourceMap, render};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    Human,
+    Json,
+    Sarif,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Deny {
+    /// Treat warnings as errors for the exit code.
+    Warnings,
+}
 
 #[derive(clap::Args)]
 pub struct CheckArgs {
-    /// Files or folders to check.
-    pub paths: Vec<std::path::PathBuf>,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = Format::Human)]
+    pub format: Format,
+    /// `--deny warnings`: exit 1 when there are warnings.
+    #[arg(long, value_enum)]
+    pub deny: Vec<Deny>,
+    /// Layout files (.mocu), profiles or schemas (.toml), or folders to search recursively.
+    #[arg(required = true)]
+    pub paths: Vec<PathBuf>,
 }
 
-pub fn main(_args: CheckArgs) -> ExitCode {
-    eprintln!("mocu check: not built yet");
-    ExitCode::from(2)
+pub fn main(args: CheckArgs) -> ExitCode {
+    let mut io_error = false;
+    let mut files: Vec<String> = Vec::new();
+    for p in &args.paths {
+        if p.is_dir() {
+            collect(p, &mut files);
+        } else if p.is_file() {
+            files.push(slashed(p));
+        } else {
+            eprintln!("error: cannot read `{}`: no such file or folder", p.display());
+            io_error = true;
+        }
+    }
+    let mut texts = Vec::new();
+    for f in files {
+        match std::fs::read_to_string(&f) {
+            Ok(t) => texts.push((f, t)),
+            Err(e) => {
+                eprintln!("error: cannot read `{f}`: {e}");
+                io_error = true;
+            }
+        }
+    }
+    // Layouts named by a profile in this run are checked through it (with its schemas) only.
+    let mut covered = std::collections::HashSet::new();
+    for (path, text) in &texts {
+        if mocu_language::file_kind(path, text) == FileKind::Profile {
+            if let Ok(p) = toml::from_str::<mocu_language::profile::ProfileFile>(text) {
+                covered.extend(p.profile.layouts.iter().filter_map(|l| FsLoader.resolve(path, l)));
+            }
+        }
+    }
+    let mut sources = SourceMap::new();
+    let mut diags = mocu_language::Diagnostics::new();
+    for (path, text) in texts {
+        if path.ends_with(".mocu") && covered.contains(&path) {
+            continue;
+        }
+        mocu_language::check_path(&path, text, &FsLoader, &mut sources, &mut diags);
+    }
+    diags.sort();
+    let errors = diags.count(Severity::Error);
+    let warnings = diags.count(Severity::Warning);
+    let list = diags.into_vec();
+    let out = match args.format {
+        Format::Human => render::human(&sources, &list),
+        Format::Json => render::json(&sources, &list),
+        Format::Sarif => render::sarif(&sources, &list),
+    };
+    if !out.is_empty() {
+        println!("{}", out.trim_end());
+    }
+    if io_error {
+        ExitCode::from(2)
+    } else if errors > 0 || (warnings > 0 && args.deny.contains(&Deny::Warnings)) {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    }
+}
+
+fn slashed(p: &Path) -> String {
+    let s = p.to_string_lossy().replace('\\', "/");
+    s.strip_prefix("./").map(str::to_string).unwrap_or(s)
+}
+
+/// Every `.mocu` and `.toml` under `dir`, sorted; hidden folders and build outputs skipped.
+fn collect(dir: &Path, out: &mut Vec<String>) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    entries.sort();
+    for p in entries {
+        let name = p.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+        if p.is_dir() {
+            if !name.starts_with('.') && !name.starts_with("target") {
+                collect(&p, out);
+            }
+        } else if name.ends_with(".mocu") || name.ends_with(".toml") {
+            out.push(slashed(&p));
+        }
+    }
 }

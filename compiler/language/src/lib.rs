@@ -1,2 +1,285 @@
-//! The Mocu layout language front end (see docs/language.md).
+//! The Mocu layout language front end: text to a checked, typed program.
+//!
+//! The pipeline ([`compile_layout`]) is a list of passes in `passes/`, each reporting into a
+//! [`Diagnostics`] sink and never stopping the others. The core does no I/O: files come through
+//! a [`SourceLoader`]; [`FsLoader`] (in `fs`) is the file-system edge used by the CLI.
+//!
+//! Entry points:
+//! - [`check_path`]: a `.mocu` layout, a profile `.toml` or a schema `.toml` → diagnostics and,
+//!   for layouts and profiles, a [`Bundle`].
+//! - [`load_target`]: what `mocu run` calls: a layout, profile or built bundle → a [`Bundle`]
+//!   or the rendered diagnostics.
+//! - [`bundle::write`] / [`bundle::read`].
 #![deny(unsafe_code)]
+
+pub mod ast;
+pub mod builtins;
+pub mod bundle;
+pub mod codes;
+pub mod diagnostics;
+pub mod fs;
+pub mod parser;
+pub mod passes;
+pub mod profile;
+pub mod program;
+pub mod render;
+pub mod schema;
+pub mod source;
+pub mod types;
+
+pub use bundle::{Bundle, BundleError, Layout};
+pub use diagnostics::{Diagnostic, Diagnostics, Severity};
+pub use fs::FsLoader;
+pub use profile::Profile;
+pub use program::Program;
+pub use schema::Schema;
+pub use source::{FileId, MemoryLoader, SourceLoader, SourceMap, Span};
+
+use passes::*;
+
+/// Settings of one check.
+#[derive(Clone, Debug)]
+pub struct Config {
+    /// Screen size in px, to place windows given in % (for W0002).
+    pub screen: (f64, f64),
+}
+
+impl Default for Config {
+    fn default() -> Config {
+        Config { screen: (1920.0, 1080.0) }
+    }
+}
+
+/// Checks one layout file (already read) and everything it uses, and lowers it to a
+/// [`Program`]. The program is returned even when there are errors (broken parts are left
+/// out); look at `diags.has_errors()` before running it.
+pub fn compile_layout(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    schema: &Schema,
+    config: &Config,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) -> Program {
+    // 1. Parse the file and everything it uses: later passes need all trees.
+    let modules = load_sources::load_sources(path, text, loader, sources, diags);
+    // 2. Collect top-level names (and duplicates) before resolving any use of them.
+    let defs = collect_definitions::collect_definitions(&modules, diags);
+    // 3. Resolve every name; unresolved names are reported here once, so the type pass
+    //    can treat them as `{error}` silently.
+    let used = resolve_names::resolve_names(&modules, &defs, diags);
+    // 4. Type and lower to the program; needs resolution and the schema's path types.
+    let program = check_types::check_types(&modules, &defs, schema, diags);
+    // 5. Schema rules need complete, typed paths (after lets are inlined).
+    check_schema::check_schema(&program, schema, diags);
+    // 6. Warnings last: they only make sense on a program that resolved and typed.
+    warn_unused::warn_unused(&modules, &used, diags);
+    warn_outside_window::warn_outside_window(&program, config.screen, diags);
+    warn_constant_watch::warn_constant_watch(&program, diags);
+    program
+}
+
+/// Loads and checks a schema file; problems are reported as E0405.
+pub fn load_schema(
+    path: &str,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+    at: Option<Span>,
+) -> Option<Schema> {
+    let text = match loader.read(path) {
+        Ok(t) => t,
+        Err(e) => {
+            if let Some(span) = at {
+                diags.error(
+                    codes::FILE_NOT_FOUND,
+                    span,
+                    format!("cannot read schema `{path}`: {e}"),
+                );
+            }
+            return None;
+        }
+    };
+    let file = sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
+    Schema::parse(file, &text, diags)
+}
+
+/// Checks a profile: its schemas, then each layout against them. Returns the bundle.
+pub fn check_profile(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) -> Bundle {
+    let file = sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
+    let parsed: profile::ProfileFile = match toml::from_str(&text) {
+        Ok(p) => p,
+        Err(e) => {
+            let r = e.span().unwrap_or(0..0);
+            diags
+                .error(codes::BAD_PROFILE, Span::new(file, r.start, r.end), format!("invalid profile: {}", e.message().trim()))
+                .help("a profile has a [profile] table with `layouts`, and optional `schemas`, [modules.*] and [inputs.*] (docs/language.md, \"Profiles\")");
+            return Bundle::default();
+        }
+    };
+    let span_of = |needle: &str| {
+        let at = text.find(&format!("\"{needle}\"")).unwrap_or(0);
+        Span::new(file, at, at + needle.len() + 2)
+    };
+    let mut schema = Schema::default();
+    for s in &parsed.profile.schemas {
+        match loader.resolve(path, s) {
+            Some(p) => {
+                if let Some(sch) = load_schema(&p, loader, sources, diags, Some(span_of(s))) {
+                    schema.merge(sch);
+                }
+            }
+            None => {
+                diags
+                    .error(
+                        codes::FILE_NOT_FOUND,
+                        span_of(s),
+                        format!("cannot find the schema `{s}`"),
+                    )
+                    .help("paths in a profile are relative to the profile");
+            }
+        }
+    }
+    let profile = parsed.to_profile();
+    let config = Config { screen: (profile.screen[0], profile.screen[1]) };
+    let mut layouts = Vec::new();
+    for l in &parsed.profile.layouts {
+        let Some(p) = loader.resolve(path, l) else {
+            diags
+                .error(codes::FILE_NOT_FOUND, span_of(l), format!("cannot find the layout `{l}`"))
+                .help("paths in a profile are relative to the profile");
+            continue;
+        };
+        match loader.read(&p) {
+            Ok(t) => {
+                let program = compile_layout(&p, t, loader, &schema, &config, sources, diags);
+                layouts.push(Layout { path: l.clone(), program });
+            }
+            Err(e) => {
+                diags.error(
+                    codes::FILE_NOT_FOUND,
+                    span_of(l),
+                    format!("cannot read the layout `{l}`: {e}"),
+                );
+            }
+        }
+    }
+    Bundle { profile: Some(profile), schema, layouts }
+}
+
+/// What kind of file a path holds, judged by its extension and, for `.toml`, its shape.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileKind {
+    Layout,
+    Profile,
+    Schema,
+    /// A `.toml` that is neither (e.g. Cargo.toml in a checked folder): skipped.
+    OtherToml,
+}
+
+pub fn file_kind(path: &str, text: &str) -> FileKind {
+    if !path.ends_with(".toml") {
+        FileKind::Layout
+    } else if profile::looks_like_profile(text) {
+        FileKind::Profile
+    } else if profile::looks_like_schema(text) || text.trim().is_empty() {
+        FileKind::Schema
+    } else if toml::from_str::<toml::Table>(text).is_err() || text.contains("[profile]") {
+        // Broken TOML: checked as a profile so the error is reported.
+        FileKind::Profile
+    } else {
+        FileKind::OtherToml
+    }
+}
+
+/// Checks one file of any kind (text already read). Layouts and profiles give a bundle.
+pub fn check_path(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) -> Option<Bundle> {
+    match file_kind(path, &text) {
+        FileKind::Layout => {
+            let program = compile_layout(
+                path,
+                text,
+                loader,
+                &Schema::default(),
+                &Config::default(),
+                sources,
+                diags,
+            );
+            Some(Bundle {
+                profile: None,
+                schema: Schema::default(),
+                layouts: vec![Layout { path: path.to_string(), program }],
+            })
+        }
+        FileKind::Profile => Some(check_profile(path, text, loader, sources, diags)),
+        FileKind::Schema => {
+            let file =
+                sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
+            Schema::parse(file, &text, diags);
+            None
+        }
+        FileKind::OtherToml => None,
+    }
+}
+
+/// Why [`load_target`] gave no bundle.
+#[derive(Debug)]
+pub enum LoadError {
+    Io(String),
+    Bundle(BundleError),
+    /// The sources have errors; `rendered` is the human report.
+    Diagnostics {
+        rendered: String,
+        errors: usize,
+    },
+}
+
+impl std::fmt::Display for LoadError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LoadError::Io(e) => f.write_str(e),
+            LoadError::Bundle(e) => write!(f, "{e}"),
+            LoadError::Diagnostics { rendered, .. } => f.write_str(rendered),
+        }
+    }
+}
+
+/// What `mocu run TARGET` loads: a built bundle (by its header), a profile `.toml` or a
+/// layout. Sources are checked; errors refuse the load, warnings are returned rendered.
+pub fn load_target(path: &std::path::Path) -> Result<(Bundle, String), LoadError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| LoadError::Io(format!("cannot read {}: {e}", path.display())))?;
+    if bundle::is_bundle(&bytes) {
+        return bundle::read(&bytes).map(|b| (b, String::new())).map_err(LoadError::Bundle);
+    }
+    let text = String::from_utf8(bytes)
+        .map_err(|_| LoadError::Io(format!("{} is not UTF-8 text", path.display())))?;
+    let p = path.to_string_lossy().replace('\\', "/");
+    let mut sources = SourceMap::new();
+    let mut diags = Diagnostics::new();
+    let bundle = check_path(&p, text, &FsLoader, &mut sources, &mut diags);
+    diags.sort();
+    let errors = diags.count(Severity::Error);
+    let list = diags.into_vec();
+    let rendered = render::human(&sources, &list);
+    match bundle {
+        Some(b) if errors == 0 => Ok((b, rendered)),
+        Some(_) => Err(LoadError::Diagnostics { rendered, errors }),
+        None => {
+            Err(LoadError::Io(format!("{} is a schema, not a layout or profile", path.display())))
+        }
+    }
+}

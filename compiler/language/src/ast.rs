@@ -1,0 +1,288 @@
+//! The syntax tree: what the parser produces, before any check. Every node has a [`Span`].
+
+use crate::source::Span;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Ident {
+    pub name: String,
+    pub span: Span,
+}
+
+/// One parsed file: its items (broken items are left out and reported).
+#[derive(Clone, Debug, Default)]
+pub struct File {
+    pub items: Vec<Item>,
+}
+
+#[derive(Clone, Debug)]
+pub enum Item {
+    Use(Use),
+    Let(Let),
+    Window(Window),
+    In(InBlock),
+    Component(Component),
+    Bind(Bind),
+    Menu(Menu),
+    Watch(Watch),
+    Each(Each),
+}
+
+/// `use "path.mocu"` or `use "path.mocu" as ns`.
+#[derive(Clone, Debug)]
+pub struct Use {
+    pub path: String,
+    pub path_span: Span,
+    pub alias: Option<Ident>,
+    pub span: Span,
+}
+
+/// `let name = expr`.
+#[derive(Clone, Debug)]
+pub struct Let {
+    pub name: Ident,
+    pub value: Expr,
+    pub span: Span,
+}
+
+/// `window name { rect … layer … }`.
+#[derive(Clone, Debug)]
+pub struct Window {
+    pub name: Ident,
+    pub rect: Option<Vec<Expr>>,
+    pub props: Vec<Prop>,
+    pub span: Span,
+}
+
+/// `name expr` inside a window, widget or primitive.
+#[derive(Clone, Debug)]
+pub struct Prop {
+    pub name: Ident,
+    pub value: Expr,
+    pub span: Span,
+}
+
+/// `in window { widget… }`.
+#[derive(Clone, Debug)]
+pub struct InBlock {
+    pub window: Ident,
+    pub widgets: Vec<Widget>,
+    pub span: Span,
+}
+
+/// `name: Component { at x y w h  param expr …  on event action… }`.
+#[derive(Clone, Debug)]
+pub struct Widget {
+    pub name: Option<Ident>,
+    pub component: Ident,
+    pub at: Option<(Vec<Expr>, Span)>,
+    pub args: Vec<Prop>,
+    pub handlers: Vec<Handler>,
+    pub span: Span,
+}
+
+/// `on event action…`.
+#[derive(Clone, Debug)]
+pub struct Handler {
+    pub event: Ident,
+    pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+/// `component Name(params) { let…  primitive… }`.
+#[derive(Clone, Debug)]
+pub struct Component {
+    pub name: Ident,
+    pub params: Vec<Param>,
+    pub body: Vec<Stmt>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub enum Param {
+    Value { name: Ident, ty: Option<TypeName>, default: Option<Expr> },
+    Event { name: Ident },
+}
+
+impl Param {
+    pub fn name(&self) -> &Ident {
+        match self {
+            Param::Value { name, .. } | Param::Event { name } => name,
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct TypeName {
+    pub name: Ident,
+    pub optional: bool,
+}
+
+#[derive(Clone, Debug)]
+pub enum Stmt {
+    Let(Let),
+    Primitive(Primitive),
+}
+
+/// `circle cx cy r  fill c  stroke c …`.
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub kind: Ident,
+    pub args: Vec<Expr>,
+    pub styles: Vec<Prop>,
+    pub span: Span,
+}
+
+/// `bind gamepad { axis left_y -> action… }`.
+#[derive(Clone, Debug)]
+pub struct Bind {
+    pub device: Ident,
+    pub bindings: Vec<Binding>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct Binding {
+    pub kind: Ident,
+    pub input: Ident,
+    pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+/// `menu for type "usv" { item "Arm" enabled expr -> action… }`.
+#[derive(Clone, Debug)]
+pub struct Menu {
+    pub object_type: String,
+    pub type_span: Span,
+    pub entries: Vec<MenuEntry>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct MenuEntry {
+    pub label: Expr,
+    pub enabled: Option<Expr>,
+    pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+/// `watch name { when cond for 5s then action… }`.
+#[derive(Clone, Debug)]
+pub struct Watch {
+    pub name: Ident,
+    pub when: Expr,
+    pub hold: Option<Expr>,
+    pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+/// `for each v in root.vehicles of type "usv" { window… in… watch… }`: a per-object template.
+#[derive(Clone, Debug)]
+pub struct Each {
+    pub var: Ident,
+    pub source: Expr,
+    pub object_type: Option<(String, Span)>,
+    pub items: Vec<Item>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub struct Action {
+    pub kind: ActionKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug)]
+pub enum ActionKind {
+    Set { target: Expr, value: Expr },
+    Call { call: Expr },
+    Swap { a: Ident, b: Ident, duration: Option<Expr> },
+    Show { window: Ident },
+    Hide { window: Ident },
+    Alert { level: Ident, message: Expr },
+}
+
+#[derive(Clone, Debug)]
+pub struct Expr {
+    pub kind: ExprKind,
+    pub span: Span,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BinOp {
+    Coalesce,
+    Range,
+    Or,
+    And,
+    Eq,
+    Ne,
+    Lt,
+    Le,
+    Gt,
+    Ge,
+    Add,
+    Sub,
+    Mul,
+    Div,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UnOp {
+    Neg,
+    Not,
+}
+
+/// A suffix written after a number literal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LitUnit {
+    Ms,
+    S,
+    Min,
+    Px,
+    Deg,
+    Percent,
+}
+
+#[derive(Clone, Debug)]
+pub enum ExprKind {
+    Number { value: f64, unit: Option<LitUnit> },
+    Str(Vec<StrPart>),
+    Colour(u32),
+    Bool(bool),
+    Name(String),
+    SelfRef,
+    Field(Box<Expr>, Ident),
+    Index(Box<Expr>, String),
+    Call(Box<Expr>, Vec<Expr>),
+    Unary(UnOp, Box<Expr>),
+    Binary(BinOp, Box<Expr>, Box<Expr>),
+    If(Box<Expr>, Box<Expr>, Box<Expr>),
+}
+
+#[derive(Clone, Debug)]
+pub enum StrPart {
+    Text(String),
+    Interp { expr: Expr, spec: Option<(String, Span)> },
+}
+
+impl BinOp {
+    pub fn symbol(self) -> &'static str {
+        match self {
+            BinOp::Coalesce => "??",
+            BinOp::Range => "..",
+            BinOp::Or => "||",
+            BinOp::And => "&&",
+            BinOp::Eq => "==",
+            BinOp::Ne => "!=",
+            BinOp::Lt => "<",
+            BinOp::Le => "<=",
+            BinOp::Gt => ">",
+            BinOp::Ge => ">=",
+            BinOp::Add => "+",
+            BinOp::Sub => "-",
+            BinOp::Mul => "*",
+            BinOp::Div => "/",
+        }
+    }
+}

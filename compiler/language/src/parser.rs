@@ -1,0 +1,814 @@
+//! Text to syntax tree. The parser never fails: it returns the items it could read and a
+//! diagnostic for every item it could not.
+//!
+//! pest stops at the first error, so recovery happens one level up: [`split_items`] cuts the
+//! file into top-level items at item keywords that start a line outside braces (or at column 0,
+//! which also recovers from a missing `}`), and each item is parsed on its own.
+
+use crate::ast::*;
+use crate::codes;
+use crate::diagnostics::Diagnostics;
+use crate::source::{FileId, Span};
+use pest::Parser as _;
+use pest::iterators::{Pair, Pairs};
+use pest::pratt_parser::{Assoc, Op, PrattParser};
+use std::sync::OnceLock;
+
+#[derive(pest_derive::Parser)]
+#[grammar = "grammar.pest"]
+struct Grammar;
+
+/// Keywords that begin a top-level item.
+pub const ITEM_KEYWORDS: &[&str] =
+    &["use", "let", "window", "in", "component", "bind", "menu", "watch", "for"];
+
+/// Parses one file. Syntax errors go to `diags`; the tree holds every item that parsed.
+pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
+    let mut items = Vec::new();
+    for chunk in split_items(text) {
+        match chunk.kind {
+            ChunkKind::Stray => {
+                let word = first_word(&text[chunk.start..chunk.end]);
+                diags
+                    .error(codes::STRAY_TEXT, Span::new(file, chunk.start, chunk.start + word.len()), format!("`{word}` is not the start of an item"))
+                    .label("expected an item here")
+                    .help("a file is made of `use`, `let`, `window`, `in`, `component`, `bind`, `menu`, `watch` and `for each` items");
+            }
+            ChunkKind::Unclosed(open) => {
+                diags
+                    .error(
+                        codes::UNCLOSED,
+                        Span::new(file, open, open + 1),
+                        "this `{` is never closed",
+                    )
+                    .label("unclosed")
+                    .help("add the matching `}` before the next item");
+            }
+            ChunkKind::Item => {
+                let src = &text[chunk.start..chunk.end];
+                match Grammar::parse(Rule::item_only, src) {
+                    Ok(mut pairs) => {
+                        let ctx = Ctx { file, offset: chunk.start };
+                        let Some(top) = pairs.next() else { continue };
+                        if let Some(item) = top.into_inner().find(|p| p.as_rule() != Rule::EOI) {
+                            items.push(ctx.item(item));
+                        }
+                    }
+                    Err(e) => report_pest_error(file, chunk.start, src, &e, diags),
+                }
+            }
+        }
+    }
+    File { items }
+}
+
+fn first_word(s: &str) -> &str {
+    let s = s.trim_start();
+    let end = s
+        .char_indices()
+        .find(|(i, c)| c.is_whitespace() || (*i > 0 && !c.is_alphanumeric() && *c != '_'))
+        .map_or(s.len(), |(i, _)| i);
+    if end == 0 {
+        s.get(..s.chars().next().map_or(0, char::len_utf8)).unwrap_or("")
+    } else {
+        &s[..end]
+    }
+}
+
+#[derive(Debug, PartialEq)]
+pub enum ChunkKind {
+    Item,
+    Stray,
+    /// An item whose braces never close; the offset of the unclosed `{`.
+    Unclosed(usize),
+}
+
+#[derive(Debug)]
+pub struct Chunk {
+    pub start: usize,
+    pub end: usize,
+    pub kind: ChunkKind,
+}
+
+/// Cuts a file into top-level items (see the module comment). Comments, strings and
+/// whitespace between items belong to no chunk.
+pub fn split_items(text: &str) -> Vec<Chunk> {
+    let bytes = text.as_bytes();
+    let mut starts: Vec<usize> = Vec::new();
+    let mut unclosed: Vec<Option<usize>> = Vec::new();
+    let mut depth_stack: Vec<usize> = Vec::new();
+    let mut stray_start: Option<usize> = None;
+    let mut stray: Vec<(usize, usize)> = Vec::new();
+    let mut i = 0;
+    let mut line_start = true;
+    while i < bytes.len() {
+        let b = bytes[i];
+        match b {
+            b'\n' => {
+                line_start = true;
+                i += 1;
+                continue;
+            }
+            b' ' | b'\t' | b'\r' => {
+                i += 1;
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                i = (i + 2).min(bytes.len());
+                continue;
+            }
+            _ => {}
+        }
+        let at_line_start = line_start;
+        line_start = false;
+        let column0 = i == 0 || bytes[i - 1] == b'\n';
+        if at_line_start && (depth_stack.is_empty() || column0) && starts_keyword(&bytes[i..]) {
+            if let Some(s) = stray_start.take() {
+                stray.push((s, trim_end(text, s, i)));
+            }
+            if !starts.is_empty() {
+                unclosed.push(depth_stack.first().copied());
+            }
+            depth_stack.clear();
+            starts.push(i);
+        } else if starts.is_empty() {
+            if stray_start.is_none() {
+                stray_start = Some(i);
+            }
+        }
+        match b {
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' && bytes[i] != b'\n' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+                i += 1;
+                continue;
+            }
+            b'{' => depth_stack.push(i),
+            b'}' => {
+                depth_stack.pop();
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    if let Some(s) = stray_start.take() {
+        stray.push((s, trim_end(text, s, text.len())));
+    }
+    if !starts.is_empty() {
+        unclosed.push(depth_stack.first().copied());
+    }
+    let mut chunks: Vec<Chunk> = stray
+        .into_iter()
+        .map(|(start, end)| Chunk { start, end, kind: ChunkKind::Stray })
+        .collect();
+    for (n, &start) in starts.iter().enumerate() {
+        let end = trim_end(text, start, starts.get(n + 1).copied().unwrap_or(text.len()));
+        let kind = match unclosed.get(n).copied().flatten() {
+            Some(open) => ChunkKind::Unclosed(open),
+            None => ChunkKind::Item,
+        };
+        chunks.push(Chunk { start, end, kind });
+    }
+    chunks.sort_by_key(|c| c.start);
+    chunks
+}
+
+fn trim_end(text: &str, start: usize, end: usize) -> usize {
+    start + text[start..end].trim_end().len()
+}
+
+fn starts_keyword(rest: &[u8]) -> bool {
+    ITEM_KEYWORDS.iter().any(|k| {
+        rest.starts_with(k.as_bytes())
+            && rest.get(k.len()).is_none_or(|c| !(c.is_ascii_alphanumeric() || *c == b'_'))
+    })
+}
+
+fn report_pest_error(
+    file: FileId,
+    offset: usize,
+    src: &str,
+    e: &pest::error::Error<Rule>,
+    diags: &mut Diagnostics,
+) {
+    use pest::error::{ErrorVariant, InputLocation};
+    let pos = match e.location {
+        InputLocation::Pos(p) => p,
+        InputLocation::Span((s, _)) => s,
+    };
+    let found = found_token(&src[pos.min(src.len())..]);
+    let span = Span::new(
+        file,
+        offset + pos,
+        offset + pos + found.len().max(1).min(src.len().saturating_sub(pos).max(1)),
+    );
+    let (message, help) = match &e.variant {
+        ErrorVariant::ParsingError { positives, .. } => describe_expected(positives, &found),
+        ErrorVariant::CustomError { message } => (message.clone(), None),
+    };
+    let d = diags.error(codes::SYNTAX, span, message);
+    if found.is_empty() {
+        d.label("the item ends here");
+    }
+    if let Some(h) = help {
+        d.help(h);
+    }
+}
+
+fn found_token(rest: &str) -> String {
+    let t = first_word(rest);
+    t.to_string()
+}
+
+fn describe_expected(positives: &[Rule], found: &str) -> (String, Option<String>) {
+    let mut names: Vec<&str> = Vec::new();
+    let mut operator = false;
+    for r in positives {
+        let name = match r {
+            Rule::EOI => "the end of the item",
+            Rule::ident => "a name",
+            Rule::expr
+            | Rule::if_expr
+            | Rule::paren
+            | Rule::boolean
+            | Rule::self_ref
+            | Rule::colour => "an expression",
+            Rule::number | Rule::geom => "a number",
+            Rule::string => "a string",
+            Rule::rect_prop => "`rect`",
+            Rule::named_prop => "a property",
+            Rule::at_prop => "`at`",
+            Rule::on_prop => "`on`",
+            Rule::widget => "a widget",
+            Rule::param | Rule::value_param | Rule::event_param => "a parameter",
+            Rule::type_name => "a type",
+            Rule::primitive | Rule::style | Rule::style_key => "a drawing primitive",
+            Rule::binding => "a binding",
+            Rule::input_name => "an input name",
+            Rule::menu_entry => "`item`",
+            Rule::set_action
+            | Rule::call_action
+            | Rule::swap_action
+            | Rule::show_action
+            | Rule::hide_action
+            | Rule::alert_action => "an action (`set`, `call`, `swap`, `show`, `hide` or `alert`)",
+            Rule::coalesce
+            | Rule::range_op
+            | Rule::or_op
+            | Rule::and_op
+            | Rule::eq
+            | Rule::ne
+            | Rule::le
+            | Rule::ge
+            | Rule::lt
+            | Rule::gt
+            | Rule::add
+            | Rule::sub
+            | Rule::mul
+            | Rule::div
+            | Rule::field
+            | Rule::index
+            | Rule::call_args => {
+                operator = true;
+                continue;
+            }
+            Rule::neg | Rule::not_op | Rule::term | Rule::primary => "an expression",
+            Rule::use_item
+            | Rule::let_item
+            | Rule::window_item
+            | Rule::in_item
+            | Rule::component_item
+            | Rule::bind_item
+            | Rule::menu_item
+            | Rule::watch_item
+            | Rule::each_item => "an item",
+            Rule::str_text | Rule::str_escape | Rule::interp => "the end of the string (`\"`)",
+            Rule::fmt_spec | Rule::fmt_body => "`}`",
+            _ => "something else",
+        };
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    if operator && names.is_empty() {
+        names.push("an operator");
+    }
+    let expected = match names.len() {
+        0 => "something else".to_string(),
+        1 => names[0].to_string(),
+        _ => format!("{} or {}", names[..names.len() - 1].join(", "), names[names.len() - 1]),
+    };
+    let found_text =
+        if found.is_empty() { "the end of the item".to_string() } else { format!("`{found}`") };
+    let help = if names.contains(&"the end of the item") {
+        Some("is an operator or a `}` missing before this, or is this word misspelt?".to_string())
+    } else if found.is_empty() {
+        Some("the item is unfinished: something is missing before the next item".to_string())
+    } else {
+        None
+    };
+    (format!("expected {expected}, found {found_text}"), help)
+}
+
+fn pratt() -> &'static PrattParser<Rule> {
+    static PRATT: OnceLock<PrattParser<Rule>> = OnceLock::new();
+    PRATT.get_or_init(|| {
+        PrattParser::new()
+            .op(Op::infix(Rule::range_op, Assoc::Left))
+            .op(Op::infix(Rule::or_op, Assoc::Left))
+            .op(Op::infix(Rule::and_op, Assoc::Left))
+            .op(Op::infix(Rule::eq, Assoc::Left)
+                | Op::infix(Rule::ne, Assoc::Left)
+                | Op::infix(Rule::lt, Assoc::Left)
+                | Op::infix(Rule::le, Assoc::Left)
+                | Op::infix(Rule::gt, Assoc::Left)
+                | Op::infix(Rule::ge, Assoc::Left))
+            .op(Op::infix(Rule::coalesce, Assoc::Right))
+            .op(Op::infix(Rule::add, Assoc::Left) | Op::infix(Rule::sub, Assoc::Left))
+            .op(Op::infix(Rule::mul, Assoc::Left) | Op::infix(Rule::div, Assoc::Left))
+            .op(Op::prefix(Rule::neg) | Op::prefix(Rule::not_op))
+    })
+}
+
+struct Ctx {
+    file: FileId,
+    offset: usize,
+}
+
+impl Ctx {
+    fn span(&self, p: &Pair<Rule>) -> Span {
+        let s = p.as_span();
+        Span::new(self.file, self.offset + s.start(), self.offset + s.end())
+    }
+
+    fn ident(&self, p: Pair<Rule>) -> Ident {
+        Ident { span: self.span(&p), name: p.as_str().to_string() }
+    }
+
+    fn item(&self, p: Pair<Rule>) -> Item {
+        let span = self.span(&p);
+        let rule = p.as_rule();
+        let mut inner = p.into_inner().peekable();
+        match rule {
+            Rule::use_item => {
+                let s = inner.next().map(|s| (self.span(&s), self.plain_string(s)));
+                let (path_span, path) = s.unwrap_or((span, String::new()));
+                let alias = inner.next().map(|a| self.ident(a));
+                Item::Use(Use { path, path_span, alias, span })
+            }
+            Rule::let_item => Item::Let(self.let_(span, inner)),
+            Rule::window_item => {
+                let name = self.next_ident(&mut inner, span);
+                let mut rect = None;
+                let mut props = Vec::new();
+                for q in inner {
+                    match q.as_rule() {
+                        Rule::rect_prop => {
+                            rect = Some(q.into_inner().map(|g| self.geom(g)).collect())
+                        }
+                        _ => props.push(self.prop(q)),
+                    }
+                }
+                Item::Window(Window { name, rect, props, span })
+            }
+            Rule::in_item => {
+                let window = self.next_ident(&mut inner, span);
+                let widgets = inner.map(|w| self.widget(w)).collect();
+                Item::In(InBlock { window, widgets, span })
+            }
+            Rule::component_item => {
+                let name = self.next_ident(&mut inner, span);
+                let mut params = Vec::new();
+                let mut body = Vec::new();
+                for q in inner {
+                    match q.as_rule() {
+                        Rule::param => {
+                            if let Some(x) = q.into_inner().next() {
+                                params.push(self.param(x));
+                            }
+                        }
+                        Rule::let_item => {
+                            let s = self.span(&q);
+                            body.push(Stmt::Let(self.let_(s, q.into_inner().peekable())));
+                        }
+                        _ => body.push(Stmt::Primitive(self.primitive(q))),
+                    }
+                }
+                Item::Component(Component { name, params, body, span })
+            }
+            Rule::bind_item => {
+                let device = self.next_ident(&mut inner, span);
+                let bindings = inner
+                    .map(|b| {
+                        let bspan = self.span(&b);
+                        let mut it = b.into_inner();
+                        let kind = it.next().map(|k| self.ident(k));
+                        let input = it.next().map(|n| {
+                            let s = self.span(&n);
+                            let text = n.as_str().trim_matches('"').to_string();
+                            Ident { name: text, span: s }
+                        });
+                        Binding {
+                            kind: kind.unwrap_or(Ident { name: String::new(), span: bspan }),
+                            input: input.unwrap_or(Ident { name: String::new(), span: bspan }),
+                            actions: it.map(|a| self.action(a)).collect(),
+                            span: bspan,
+                        }
+                    })
+                    .collect();
+                Item::Bind(Bind { device, bindings, span })
+            }
+            Rule::menu_item => {
+                let (type_span, object_type) = match inner.next() {
+                    Some(s) => (self.span(&s), self.plain_string(s)),
+                    None => (span, String::new()),
+                };
+                let entries = inner
+                    .map(|e| {
+                        let espan = self.span(&e);
+                        let mut label = None;
+                        let mut enabled = None;
+                        let mut actions = Vec::new();
+                        for q in e.into_inner() {
+                            match q.as_rule() {
+                                Rule::expr if label.is_none() => label = Some(self.expr(q)),
+                                Rule::expr => enabled = Some(self.expr(q)),
+                                _ => actions.push(self.action(q)),
+                            }
+                        }
+                        let label =
+                            label.unwrap_or(Expr { kind: ExprKind::Str(Vec::new()), span: espan });
+                        MenuEntry { label, enabled, actions, span: espan }
+                    })
+                    .collect();
+                Item::Menu(Menu { object_type, type_span, entries, span })
+            }
+            Rule::watch_item => {
+                let name = self.next_ident(&mut inner, span);
+                let mut exprs = Vec::new();
+                let mut actions = Vec::new();
+                for q in inner {
+                    match q.as_rule() {
+                        Rule::expr => exprs.push(self.expr(q)),
+                        _ => actions.push(self.action(q)),
+                    }
+                }
+                let mut exprs = exprs.into_iter();
+                let when = exprs.next().unwrap_or(Expr { kind: ExprKind::Bool(false), span });
+                Item::Watch(Watch { name, when, hold: exprs.next(), actions, span })
+            }
+            Rule::each_item => {
+                let var = self.next_ident(&mut inner, span);
+                let source = inner
+                    .next()
+                    .map_or(Expr { kind: ExprKind::Name("root".into()), span }, |e| self.expr(e));
+                let mut object_type = None;
+                let mut items = Vec::new();
+                for q in inner {
+                    if q.as_rule() == Rule::string {
+                        let s = self.span(&q);
+                        object_type = Some((self.plain_string(q), s));
+                    } else {
+                        items.push(self.item(q));
+                    }
+                }
+                Item::Each(Each { var, source, object_type, items, span })
+            }
+            _ => Item::Let(Let {
+                name: Ident { name: String::new(), span },
+                value: Expr { kind: ExprKind::Bool(false), span },
+                span,
+            }),
+        }
+    }
+
+    fn next_ident<'a>(&self, it: &mut impl Iterator<Item = Pair<'a, Rule>>, span: Span) -> Ident {
+        it.next().map_or(Ident { name: String::new(), span }, |p| self.ident(p))
+    }
+
+    fn let_<'a>(&self, span: Span, mut inner: impl Iterator<Item = Pair<'a, Rule>>) -> Let {
+        let name = self.next_ident(&mut inner, span);
+        let value =
+            inner.next().map_or(Expr { kind: ExprKind::Bool(false), span }, |e| self.expr(e));
+        Let { name, value, span }
+    }
+
+    fn prop(&self, p: Pair<Rule>) -> Prop {
+        let span = self.span(&p);
+        let mut it = p.into_inner();
+        let name = self.next_ident(&mut it, span);
+        let value = it.next().map_or(Expr { kind: ExprKind::Bool(false), span }, |e| self.expr(e));
+        Prop { name, value, span }
+    }
+
+    fn geom(&self, p: Pair<Rule>) -> Expr {
+        let span = self.span(&p);
+        let negative = p.as_str().trim_start().starts_with('-');
+        let Some(inner) = p.into_inner().next() else {
+            return Expr { kind: ExprKind::Number { value: 0.0, unit: None }, span };
+        };
+        let e = match inner.as_rule() {
+            Rule::number => self.number(inner),
+            _ => self.expr(inner),
+        };
+        if negative {
+            Expr { kind: ExprKind::Unary(UnOp::Neg, Box::new(e)), span }
+        } else {
+            Expr { span, ..e }
+        }
+    }
+
+    fn widget(&self, p: Pair<Rule>) -> Widget {
+        let span = self.span(&p);
+        let mut idents = Vec::new();
+        let mut at = None;
+        let mut args = Vec::new();
+        let mut handlers = Vec::new();
+        for q in p.into_inner() {
+            match q.as_rule() {
+                Rule::ident => idents.push(self.ident(q)),
+                Rule::at_prop => {
+                    let s = self.span(&q);
+                    at = Some((q.into_inner().map(|g| self.geom(g)).collect(), s));
+                }
+                Rule::on_prop => {
+                    let s = self.span(&q);
+                    let mut it = q.into_inner();
+                    let event = self.next_ident(&mut it, s);
+                    handlers.push(Handler {
+                        event,
+                        actions: it.map(|a| self.action(a)).collect(),
+                        span: s,
+                    });
+                }
+                _ => args.push(self.prop(q)),
+            }
+        }
+        let component = idents.pop().unwrap_or(Ident { name: String::new(), span });
+        Widget { name: idents.pop(), component, at, args, handlers, span }
+    }
+
+    fn param(&self, p: Pair<Rule>) -> Param {
+        let span = self.span(&p);
+        let rule = p.as_rule();
+        let mut it = p.into_inner();
+        let name = self.next_ident(&mut it, span);
+        if rule == Rule::event_param {
+            return Param::Event { name };
+        }
+        let mut ty = None;
+        let mut default = None;
+        for q in it {
+            match q.as_rule() {
+                Rule::type_name => {
+                    let optional = q.as_str().ends_with('?');
+                    let mut t = q.into_inner();
+                    let n = self.next_ident(&mut t, span);
+                    ty = Some(TypeName { name: n, optional });
+                }
+                _ => default = Some(self.expr(q)),
+            }
+        }
+        Param::Value { name, ty, default }
+    }
+
+    fn primitive(&self, p: Pair<Rule>) -> Primitive {
+        let span = self.span(&p);
+        let mut it = p.into_inner();
+        let kind = self.next_ident(&mut it, span);
+        let mut args = Vec::new();
+        let mut styles = Vec::new();
+        for q in it {
+            match q.as_rule() {
+                Rule::style => {
+                    let s = self.span(&q);
+                    let mut si = q.into_inner();
+                    let key =
+                        si.next().map_or(Ident { name: String::new(), span: s }, |k| self.ident(k));
+                    let value = si
+                        .next()
+                        .map_or(Expr { kind: ExprKind::Bool(false), span: s }, |e| self.expr(e));
+                    styles.push(Prop { name: key, value, span: s });
+                }
+                _ => args.push(self.expr(q)),
+            }
+        }
+        Primitive { kind, args, styles, span }
+    }
+
+    fn action(&self, p: Pair<Rule>) -> Action {
+        let span = self.span(&p);
+        let rule = p.as_rule();
+        let mut it = p.into_inner();
+        let dummy = || Expr { kind: ExprKind::Bool(false), span };
+        let kind = match rule {
+            Rule::set_action => {
+                let target = it.next().map_or_else(dummy, |e| self.expr(e));
+                let value = it.next().map_or_else(dummy, |e| self.expr(e));
+                ActionKind::Set { target, value }
+            }
+            Rule::call_action => {
+                ActionKind::Call { call: it.next().map_or_else(dummy, |e| self.expr(e)) }
+            }
+            Rule::swap_action => {
+                let a = self.next_ident(&mut it, span);
+                let b = self.next_ident(&mut it, span);
+                ActionKind::Swap { a, b, duration: it.next().map(|n| self.number(n)) }
+            }
+            Rule::show_action => ActionKind::Show { window: self.next_ident(&mut it, span) },
+            Rule::hide_action => ActionKind::Hide { window: self.next_ident(&mut it, span) },
+            _ => {
+                let level = self.next_ident(&mut it, span);
+                ActionKind::Alert { level, message: it.next().map_or_else(dummy, |e| self.expr(e)) }
+            }
+        };
+        Action { kind, span }
+    }
+
+    fn plain_string(&self, p: Pair<Rule>) -> String {
+        let mut out = String::new();
+        for q in p.into_inner() {
+            match q.as_rule() {
+                Rule::str_text => out.push_str(q.as_str()),
+                Rule::str_escape => out.push_str(&unescape(q.as_str())),
+                _ => out.push_str(q.as_str()),
+            }
+        }
+        out
+    }
+
+    fn number(&self, p: Pair<Rule>) -> Expr {
+        let span = self.span(&p);
+        let text = p.as_str();
+        let split = text.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(text.len());
+        let value = text[..split].parse::<f64>().unwrap_or(0.0);
+        let unit = match &text[split..] {
+            "ms" => Some(LitUnit::Ms),
+            "s" => Some(LitUnit::S),
+            "min" => Some(LitUnit::Min),
+            "px" => Some(LitUnit::Px),
+            "deg" => Some(LitUnit::Deg),
+            "%" => Some(LitUnit::Percent),
+            _ => None,
+        };
+        Expr { kind: ExprKind::Number { value, unit }, span }
+    }
+
+    pub fn expr(&self, p: Pair<Rule>) -> Expr {
+        self.expr_pairs(p.into_inner())
+    }
+
+    fn expr_pairs(&self, pairs: Pairs<Rule>) -> Expr {
+        pratt()
+            .map_primary(|q| self.term(q))
+            .map_prefix(|op, rhs| {
+                let span = self.span(&op).to(rhs.span);
+                let op = if op.as_rule() == Rule::neg { UnOp::Neg } else { UnOp::Not };
+                Expr { kind: ExprKind::Unary(op, Box::new(rhs)), span }
+            })
+            .map_infix(|lhs, op, rhs| {
+                let span = lhs.span.to(rhs.span);
+                let op = match op.as_rule() {
+                    Rule::coalesce => BinOp::Coalesce,
+                    Rule::range_op => BinOp::Range,
+                    Rule::or_op => BinOp::Or,
+                    Rule::and_op => BinOp::And,
+                    Rule::eq => BinOp::Eq,
+                    Rule::ne => BinOp::Ne,
+                    Rule::lt => BinOp::Lt,
+                    Rule::le => BinOp::Le,
+                    Rule::gt => BinOp::Gt,
+                    Rule::ge => BinOp::Ge,
+                    Rule::add => BinOp::Add,
+                    Rule::sub => BinOp::Sub,
+                    Rule::mul => BinOp::Mul,
+                    _ => BinOp::Div,
+                };
+                Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span }
+            })
+            .parse(pairs)
+    }
+
+    /// A primary and its postfixes (field, index, call).
+    fn term(&self, p: Pair<Rule>) -> Expr {
+        let mut it = p.into_inner();
+        let Some(first) = it.next() else {
+            return Expr {
+                kind: ExprKind::Bool(false),
+                span: Span::new(self.file, self.offset, self.offset),
+            };
+        };
+        let mut lhs = match first.into_inner().next() {
+            Some(prim) => self.primary(prim),
+            None => {
+                return Expr {
+                    kind: ExprKind::Bool(false),
+                    span: Span::new(self.file, self.offset, self.offset),
+                };
+            }
+        };
+        for op in it {
+            let span = lhs.span.to(self.span(&op));
+            let kind = match op.as_rule() {
+                Rule::field => {
+                    let s = self.span(&op);
+                    let name = op
+                        .into_inner()
+                        .next()
+                        .map_or(Ident { name: String::new(), span: s }, |i| self.ident(i));
+                    ExprKind::Field(Box::new(lhs), name)
+                }
+                Rule::index => {
+                    let key =
+                        op.into_inner().next().map(|s| self.plain_string(s)).unwrap_or_default();
+                    ExprKind::Index(Box::new(lhs), key)
+                }
+                _ => ExprKind::Call(Box::new(lhs), op.into_inner().map(|a| self.expr(a)).collect()),
+            };
+            lhs = Expr { kind, span };
+        }
+        lhs
+    }
+
+    fn primary(&self, p: Pair<Rule>) -> Expr {
+        let span = self.span(&p);
+        let kind = match p.as_rule() {
+            Rule::number => return self.number(p),
+            Rule::paren => {
+                return p.into_inner().next().map_or(
+                    Expr { kind: ExprKind::Bool(false), span },
+                    |e| Expr { span, ..self.expr(e) },
+                );
+            }
+            Rule::if_expr => {
+                let mut parts = p.into_inner().map(|e| Box::new(self.expr(e)));
+                let dummy = || Box::new(Expr { kind: ExprKind::Bool(false), span });
+                let c = parts.next().unwrap_or_else(dummy);
+                let a = parts.next().unwrap_or_else(dummy);
+                let b = parts.next().unwrap_or_else(dummy);
+                ExprKind::If(c, a, b)
+            }
+            Rule::string => {
+                let mut parts = Vec::new();
+                for q in p.into_inner() {
+                    match q.as_rule() {
+                        Rule::str_text => push_text(&mut parts, q.as_str()),
+                        Rule::str_escape => push_text(&mut parts, &unescape(q.as_str())),
+                        _ => {
+                            let mut it = q.into_inner();
+                            let Some(e) = it.next() else { continue };
+                            let expr = self.expr(e);
+                            let spec = it.next().map(|s| {
+                                let sp = self.span(&s);
+                                (s.as_str().trim_start_matches(':').to_string(), sp)
+                            });
+                            parts.push(StrPart::Interp { expr, spec });
+                        }
+                    }
+                }
+                ExprKind::Str(parts)
+            }
+            Rule::colour => {
+                let hex = &p.as_str()[1..];
+                let v = u32::from_str_radix(hex, 16).unwrap_or(0);
+                ExprKind::Colour(if hex.len() == 6 { (v << 8) | 0xff } else { v })
+            }
+            Rule::boolean => ExprKind::Bool(p.as_str() == "true"),
+            Rule::self_ref => ExprKind::SelfRef,
+            _ => ExprKind::Name(p.as_str().to_string()),
+        };
+        Expr { kind, span }
+    }
+}
+
+fn push_text(parts: &mut Vec<StrPart>, s: &str) {
+    if let Some(StrPart::Text(t)) = parts.last_mut() {
+        t.push_str(s);
+    } else {
+        parts.push(StrPart::Text(s.to_string()));
+    }
+}
+
+fn unescape(s: &str) -> String {
+    match s {
+        "{{" | "\\{" => "{".into(),
+        "}}" | "\\}" => "}".into(),
+        "\\n" => "\n".into(),
+        "\\t" => "\t".into(),
+        "\\\\" => "\\".into(),
+        "\\\"" => "\"".into(),
+        other => other.to_string(),
+    }
+}

@@ -1,0 +1,1174 @@
+//! Pass 4: types, and lowering to the checked [`Program`]. Every expression gets a
+//! [`Type`]; lets are inlined; paths are typed from the schema when one covers them.
+//! Reports a non-number used as a number (E0301), other mismatches (E0302), argument counts
+//! (E0303), non-boolean conditions (E0304), unknown type names (E0305), misplaced method
+//! calls (E0306), bad format specs (E0307), `set` of a non-path (E0308), unknown primitives
+//! and styles (E0309), and unit mismatches (E0402, units come from the schema and literals).
+//!
+//! Runs after `resolve_names`: a name it cannot resolve was reported there, so here it just
+//! becomes the `{error}` type, which is accepted everywhere (no cascades).
+
+use super::{DefId, Definitions, ModuleId, Modules, component_item, let_item};
+use crate::ast::{self, BinOp, ExprKind, Item, LitUnit, StrPart, UnOp};
+use crate::builtins::{self, Returns};
+use crate::codes;
+use crate::diagnostics::Diagnostics;
+use crate::program::*;
+use crate::schema::{Lookup, Schema};
+use crate::source::Span;
+use crate::types::{Type, TypeKind};
+use std::collections::HashMap;
+
+pub fn check_types(
+    modules: &Modules,
+    defs: &Definitions,
+    schema: &Schema,
+    diags: &mut Diagnostics,
+) -> Program {
+    let mut t = Typer {
+        modules,
+        defs,
+        schema,
+        diags,
+        top_lets: HashMap::new(),
+        program: Program::default(),
+    };
+    t.program.files = modules.iter().map(|m| m.path.clone()).collect();
+    for m in 0..modules.len() {
+        t.module(m);
+    }
+    t.program
+}
+
+#[derive(Clone, Default)]
+struct Scope {
+    module: ModuleId,
+    limit: Option<usize>,
+    locals: Vec<(String, Expr)>,
+    self_type: Option<Option<String>>,
+}
+
+impl Scope {
+    fn with(&self, name: &str, e: Expr) -> Scope {
+        let mut s = self.clone();
+        s.locals.push((name.to_string(), e));
+        s
+    }
+}
+
+struct Typer<'a, 'd> {
+    modules: &'a Modules,
+    defs: &'a Definitions,
+    schema: &'a Schema,
+    diags: &'d mut Diagnostics,
+    top_lets: HashMap<DefId, Expr>,
+    program: Program,
+}
+
+/// Where windows, widgets and watches go: the program, or a template.
+#[derive(Default)]
+struct Sink {
+    windows: Vec<Window>,
+    widgets: Vec<Widget>,
+    watches: Vec<Watch>,
+}
+
+fn mk(ty: Type, node: Node, span: Span) -> Expr {
+    Expr { ty, node, span }
+}
+
+impl Typer<'_, '_> {
+    fn module(&mut self, m: ModuleId) {
+        let base = Scope { module: m, ..Scope::default() };
+        let mut sink = Sink::default();
+        for item in &self.modules[m].ast.items {
+            self.item(item, &base, &mut sink);
+        }
+        self.program.windows.append(&mut sink.windows);
+        self.program.widgets.append(&mut sink.widgets);
+        self.program.watches.append(&mut sink.watches);
+    }
+
+    fn item(&mut self, item: &Item, scope: &Scope, sink: &mut Sink) {
+        match item {
+            Item::Use(_) | Item::Let(_) => {}
+            Item::Window(w) => {
+                let win = self.window(w, scope);
+                sink.windows.push(win);
+            }
+            Item::In(b) => {
+                for w in &b.widgets {
+                    if let Some(widget) = self.widget(w, &b.window.name, scope) {
+                        sink.widgets.push(widget);
+                    }
+                }
+            }
+            Item::Component(c) => {
+                let comp = self.component(c, scope.module);
+                self.program.components.push(comp);
+            }
+            Item::Bind(b) => {
+                for bnd in &b.bindings {
+                    let s = match builtins::binding_value(&bnd.kind.name) {
+                        Some(v) => {
+                            scope.with(v, mk(Type::number(), Node::Input(v.to_string()), bnd.span))
+                        }
+                        None => scope.clone(),
+                    };
+                    let actions = self.actions(&bnd.actions, &s);
+                    self.program.bindings.push(Binding {
+                        device: b.device.name.clone(),
+                        kind: bnd.kind.name.clone(),
+                        input: bnd.input.name.clone(),
+                        actions,
+                        span: bnd.span,
+                    });
+                }
+            }
+            Item::Menu(menu) => {
+                let ty = (!menu.object_type.is_empty()).then(|| menu.object_type.clone());
+                if let Some(t) = &ty {
+                    if !self.schema.is_empty() && !self.schema.has_type(t) {
+                        self.diags
+                            .error(
+                                codes::UNKNOWN_PROPERTY,
+                                menu.type_span,
+                                format!("the schema declares no object type \"{t}\""),
+                            )
+                            .suggest(t, self.schema.types.keys().map(String::as_str));
+                    }
+                }
+                let s = Scope { self_type: Some(ty), ..scope.clone() };
+                let items = menu
+                    .entries
+                    .iter()
+                    .map(|e| {
+                        let label = self.expect(&e.label, &s, &Type::STRING, "a menu item's label");
+                        let enabled =
+                            e.enabled.as_ref().map(|x| self.condition(x, &s, "`enabled`"));
+                        MenuItem { label, enabled, actions: self.actions(&e.actions, &s) }
+                    })
+                    .collect();
+                self.program.menus.push(Menu {
+                    object_type: menu.object_type.clone(),
+                    items,
+                    span: menu.span,
+                });
+            }
+            Item::Watch(w) => {
+                let when = self.condition(&w.when, scope, "a watch's `when`");
+                let hold_ms = w.hold.as_ref().and_then(|h| {
+                    let b = self.expect(h, scope, &Type::DURATION, "a hold time (`for 5s`)");
+                    b.expr.constant().and_then(|c| c.number())
+                });
+                let actions = self.actions(&w.actions, scope);
+                sink.watches.push(Watch {
+                    name: w.name.name.clone(),
+                    when,
+                    hold_ms,
+                    actions,
+                    span: w.span,
+                });
+            }
+            Item::Each(e) => {
+                let source = self.lower(&e.source, scope);
+                let source = match source.node {
+                    Node::Path(p) => p,
+                    _ => {
+                        if source.ty.kind != TypeKind::Error {
+                            self.diags.error(
+                                codes::NOT_A_PATH,
+                                e.source.span,
+                                "`for each … in` needs the path of an object, e.g. `root.vehicles`",
+                            );
+                        }
+                        Path { base: PathBase::Root, segments: vec![], base_type: None }
+                    }
+                };
+                let object_type = e.object_type.as_ref().map(|(t, span)| {
+                    if !self.schema.is_empty() && !self.schema.has_type(t) {
+                        self.diags
+                            .error(
+                                codes::UNKNOWN_PROPERTY,
+                                *span,
+                                format!("the schema declares no object type \"{t}\""),
+                            )
+                            .suggest(t, self.schema.types.keys().map(String::as_str));
+                    }
+                    t.clone()
+                });
+                let var_ty = Type::new(TypeKind::Object { object_type: object_type.clone() });
+                let var = mk(
+                    var_ty,
+                    Node::Path(Path {
+                        base: PathBase::Var(e.var.name.clone()),
+                        segments: vec![],
+                        base_type: object_type.clone(),
+                    }),
+                    e.var.span,
+                );
+                let mut s = scope
+                    .with(&e.var.name, var)
+                    .with("index", mk(Type::number(), Node::Index, e.span));
+                let mut inner = Sink::default();
+                for it in &e.items {
+                    if let Item::Let(l) = it {
+                        let v = self.lower(&l.value, &s);
+                        s = s.with(&l.name.name, v);
+                    } else {
+                        self.item(it, &s, &mut inner);
+                    }
+                }
+                self.program.templates.push(Template {
+                    var: e.var.name.clone(),
+                    source,
+                    object_type,
+                    windows: inner.windows,
+                    widgets: inner.widgets,
+                    watches: inner.watches,
+                    span: e.span,
+                });
+            }
+        }
+    }
+
+    fn window(&mut self, w: &ast::Window, scope: &Scope) -> Window {
+        let span = w.span;
+        let konst = |n: f64| Bound::new(mk(Type::number(), Node::Number(n), span));
+        let mut win = Window {
+            name: w.name.name.clone(),
+            kind: "layer".into(),
+            layer: konst(0.0),
+            rect: vec![
+                konst(0.0),
+                konst(0.0),
+                Bound::new(mk(Type::number_in(Some("%".into())), Node::Number(100.0), span)),
+                Bound::new(mk(Type::number_in(Some("%".into())), Node::Number(100.0), span)),
+            ],
+            opacity: konst(1.0),
+            visible: Bound::new(mk(Type::BOOL, Node::Bool(true), span)),
+            source: None,
+            span,
+        };
+        if let Some(rect) = &w.rect {
+            win.rect = rect.iter().map(|g| self.geometry(g, scope)).collect();
+        }
+        for p in &w.props {
+            let Some(want) = builtins::window_prop_type(&p.name.name) else { continue };
+            let b = if want.kind == TypeKind::Bool {
+                self.condition(&p.value, scope, "`visible`")
+            } else {
+                self.expect(&p.value, scope, &want, &format!("a window's `{}`", p.name.name))
+            };
+            match p.name.name.as_str() {
+                "layer" => win.layer = b,
+                "opacity" => win.opacity = b,
+                "visible" => win.visible = b,
+                "source" => win.source = Some(b),
+                _ => {
+                    if let Node::Str(s) = &b.expr.node {
+                        win.kind = s.clone();
+                    } else {
+                        self.diags.error(codes::TYPE_MISMATCH, p.value.span, "a window's `type` must be a constant string such as \"video\" or \"map\"");
+                    }
+                }
+            }
+        }
+        win
+    }
+
+    fn geometry(&mut self, e: &ast::Expr, scope: &Scope) -> Bound {
+        let b = self.lower(e, scope);
+        if !b.ty.is_numeric() {
+            self.not_a_number(&b, "a position or size");
+        } else if let Some(u) = b.ty.unit() {
+            if u != "%" && u != "px" {
+                self.diags
+                    .error(
+                        codes::UNIT_MISMATCH,
+                        e.span,
+                        format!("a position or size is in px or %, not {u}"),
+                    )
+                    .label(format!("this is in {u}"));
+            }
+        }
+        Bound::new(b)
+    }
+
+    /// The component's parameters as (name, type, default), its events, and whether native.
+    fn signature(
+        &mut self,
+        module: ModuleId,
+        name: &str,
+    ) -> Option<(Vec<(String, Type, Option<Bound>)>, Vec<String>, bool)> {
+        if let Some(n) = builtins::native(name) {
+            let params = n
+                .params
+                .iter()
+                .map(|(p, t, d)| {
+                    let ty = Type::parse_name(t).unwrap_or(Type::DYNAMIC).maybe_absent(*d);
+                    (p.to_string(), ty, None)
+                })
+                .collect();
+            return Some((params, n.events.iter().map(|e| e.to_string()).collect(), true));
+        }
+        let id = self.defs.find_component(self.modules, module, name)?;
+        let c = component_item(self.modules, id)?;
+        let (params, events) = self.params(c, id.module, false);
+        Some((params.into_iter().map(|p| (p.name, p.ty, p.default)).collect(), events, false))
+    }
+
+    fn params(
+        &mut self,
+        c: &ast::Component,
+        module: ModuleId,
+        report: bool,
+    ) -> (Vec<Param>, Vec<String>) {
+        let scope = Scope { module, ..Scope::default() };
+        let mut params = Vec::new();
+        let mut events = Vec::new();
+        for p in &c.params {
+            match p {
+                ast::Param::Event { name } => events.push(name.name.clone()),
+                ast::Param::Value { name, ty, default } => {
+                    let declared = ty.as_ref().and_then(|t| match Type::parse_name(&t.name.name) {
+                        Some(ty) => Some(ty.maybe_absent(t.optional)),
+                        None => {
+                            if report {
+                                self.diags
+                                    .error(codes::UNKNOWN_TYPE, t.name.span, format!("unknown type `{}`", t.name.name))
+                                    .suggest(&t.name.name, ["number", "bool", "string", "colour", "duration", "range", "object"])
+                                    .help
+                                    .get_or_insert_with(|| "types are number, bool, string, colour, duration, range and object; add `?` when it may be absent".into());
+                            }
+                            Some(Type::ERROR)
+                        }
+                    });
+                    let default = default.as_ref().map(|d| {
+                        let b = if report {
+                            self.lower(d, &scope)
+                        } else {
+                            self.quiet(|t| t.lower(d, &scope))
+                        };
+                        if report {
+                            if let Some(want) = &declared {
+                                self.check_fits(
+                                    &b,
+                                    want,
+                                    &format!("the default of `{}`", name.name),
+                                );
+                            }
+                        }
+                        Bound::new(b)
+                    });
+                    let ty = declared
+                        .or_else(|| default.as_ref().map(|d| d.expr.ty.clone()))
+                        .unwrap_or(Type::DYNAMIC);
+                    params.push(Param { name: name.name.clone(), ty, default });
+                }
+            }
+        }
+        (params, events)
+    }
+
+    /// Runs `f` with diagnostics discarded (re-lowering something already checked).
+    fn quiet<R>(&mut self, f: impl FnOnce(&mut Typer<'_, '_>) -> R) -> R {
+        let mut scratch = Diagnostics::new();
+        let mut t = Typer {
+            modules: self.modules,
+            defs: self.defs,
+            schema: self.schema,
+            diags: &mut scratch,
+            top_lets: std::mem::take(&mut self.top_lets),
+            program: Program::default(),
+        };
+        let r = f(&mut t);
+        self.top_lets = t.top_lets;
+        r
+    }
+
+    fn widget(&mut self, w: &ast::Widget, window: &str, scope: &Scope) -> Option<Widget> {
+        let at =
+            w.at.as_ref()
+                .map(|(a, _)| a.iter().map(|g| self.geometry(g, scope)).collect())
+                .unwrap_or_default();
+        let (params, events, native) = self.signature(scope.module, &w.component.name)?;
+        let mut arg_scope = scope.clone();
+        for (name, ty, _) in &params {
+            arg_scope = arg_scope.with(name, mk(ty.clone(), Node::Param(name.clone()), w.span));
+        }
+        let mut args = Vec::new();
+        let mut visible = None;
+        for a in &w.args {
+            if a.name.name == "visible" {
+                visible = Some(self.condition(&a.value, &arg_scope, "`visible`"));
+                continue;
+            }
+            let Some((_, ty, _)) = params.iter().find(|(n, ..)| *n == a.name.name) else {
+                continue;
+            };
+            let b = if ty.kind == TypeKind::Bool {
+                self.condition(&a.value, &arg_scope, &format!("`{}`", a.name.name))
+            } else {
+                self.expect(
+                    &a.value,
+                    &arg_scope,
+                    ty,
+                    &format!("`{}` of {}", a.name.name, w.component.name),
+                )
+            };
+            args.push(Arg { name: a.name.name.clone(), value: b });
+        }
+        for (name, _, default) in params {
+            if !args.iter().any(|a: &Arg| a.name == name) {
+                if let Some(d) = default {
+                    args.push(Arg { name, value: d });
+                }
+            }
+        }
+        let handlers = w
+            .handlers
+            .iter()
+            .filter(|h| events.contains(&h.event.name))
+            .map(|h| Handler {
+                event: h.event.name.clone(),
+                actions: self.actions(&h.actions, scope),
+            })
+            .collect();
+        Some(Widget {
+            name: w.name.as_ref().map(|n| n.name.clone()),
+            window: window.to_string(),
+            component: w.component.name.clone(),
+            native,
+            at,
+            args,
+            visible,
+            handlers,
+            span: w.span,
+        })
+    }
+
+    fn component(&mut self, c: &ast::Component, module: ModuleId) -> Component {
+        let (params, events) = self.params(c, module, true);
+        let mut s = Scope { module, ..Scope::default() }
+            .with("w", mk(Type::number(), Node::Size("w".into()), c.span))
+            .with("h", mk(Type::number(), Node::Size("h".into()), c.span));
+        for p in &params {
+            let node = if matches!(p.ty.kind, TypeKind::Object { .. }) {
+                Node::Path(Path {
+                    base: PathBase::Param(p.name.clone()),
+                    segments: vec![],
+                    base_type: None,
+                })
+            } else {
+                Node::Param(p.name.clone())
+            };
+            s = s.with(&p.name, mk(p.ty.clone(), node, c.span));
+        }
+        let mut shapes = Vec::new();
+        for stmt in &c.body {
+            match stmt {
+                ast::Stmt::Let(l) => {
+                    let v = self.lower(&l.value, &s);
+                    s = s.with(&l.name.name, v);
+                }
+                ast::Stmt::Primitive(p) => {
+                    if let Some(shape) = self.primitive(p, &s) {
+                        shapes.push(shape);
+                    }
+                }
+            }
+        }
+        Component { name: c.name.name.clone(), params, events, shapes, span: c.span }
+    }
+
+    fn primitive(&mut self, p: &ast::Primitive, s: &Scope) -> Option<Shape> {
+        let Some(def) = builtins::primitive(&p.kind.name) else {
+            self.diags
+                .error(
+                    codes::UNKNOWN_PRIMITIVE,
+                    p.kind.span,
+                    format!("there is no drawing primitive `{}`", p.kind.name),
+                )
+                .suggest(&p.kind.name, builtins::PRIMITIVES.iter().map(|d| d.name))
+                .help
+                .get_or_insert_with(|| {
+                    "primitives: rect, rounded, circle, arc, line, polyline, text, image".into()
+                });
+            return None;
+        };
+        let n = def.args.len();
+        let count_ok = if def.variadic {
+            p.args.len() >= 2 * n && p.args.len() % n == 0
+        } else {
+            p.args.len() == n
+        };
+        if !count_ok {
+            let want = if def.variadic {
+                format!("pairs of numbers (at least {})", 2 * n)
+            } else {
+                format!("{n}")
+            };
+            self.diags
+                .error(codes::ARG_COUNT, p.kind.span, format!("`{}` takes {want} arguments, not {}", def.name, p.args.len()))
+                .help("a negative number in an argument list needs parentheses: `(-5)`, or `a - b` is read as one subtraction");
+        }
+        let args = p
+            .args
+            .iter()
+            .enumerate()
+            .map(|(i, a)| match def.args.as_bytes()[i % n] {
+                b'n' => {
+                    self.expect(a, s, &Type::number(), &format!("an argument of `{}`", def.name))
+                }
+                b's' => self.expect(a, s, &Type::STRING, &format!("an argument of `{}`", def.name)),
+                _ => {
+                    let b = self.lower(a, s);
+                    self.check_showable(&b);
+                    Bound::new(b)
+                }
+            })
+            .collect();
+        let mut styles = Vec::new();
+        for st in &p.styles {
+            let Some(want) = builtins::style_type(&st.name.name) else {
+                self.diags.error(
+                    codes::UNKNOWN_PRIMITIVE,
+                    st.name.span,
+                    format!("unknown style `{}`", st.name.name),
+                );
+                continue;
+            };
+            let v = if want.kind == TypeKind::Bool {
+                self.condition(&st.value, s, "`visible`")
+            } else {
+                self.expect(&st.value, s, &want, &format!("`{}`", st.name.name))
+            };
+            styles.push(Arg { name: st.name.name.clone(), value: v });
+        }
+        Some(Shape { kind: def.name.to_string(), args, styles, span: p.span })
+    }
+
+    fn actions(&mut self, actions: &[ast::Action], scope: &Scope) -> Vec<Action> {
+        let mut out = Vec::new();
+        for a in actions {
+            let span = a.span;
+            match &a.kind {
+                ast::ActionKind::Set { target, value } => {
+                    let t = self.lower(target, scope);
+                    let v = self.lower(value, scope);
+                    match t.node {
+                        Node::Path(p) => {
+                            self.check_fits(&v, &t.ty.clone().present(), "the value to `set`");
+                            out.push(Action::Set { target: p, value: Bound::new(v), span });
+                        }
+                        _ => {
+                            if t.ty.kind != TypeKind::Error {
+                                self.diags
+                                    .error(
+                                        codes::NOT_A_PATH,
+                                        target.span,
+                                        "`set` needs a property path on its left",
+                                    )
+                                    .help("write `set vehicle.property = value`");
+                            }
+                        }
+                    }
+                }
+                ast::ActionKind::Call { call } => {
+                    if let ExprKind::Call(callee, args) = &call.kind {
+                        if !matches!(callee.kind, ExprKind::Name(_)) {
+                            let c = self.lower(callee, scope);
+                            let args: Vec<Bound> =
+                                args.iter().map(|x| Bound::new(self.lower(x, scope))).collect();
+                            if let Node::Path(p) = c.node {
+                                out.push(Action::Call { target: p, args, span });
+                                continue;
+                            }
+                            if c.ty.kind == TypeKind::Error {
+                                continue;
+                            }
+                        }
+                    }
+                    self.diags
+                        .error(codes::MISPLACED_CALL, call.span, "`call` needs a method call on an object")
+                        .help("write `call vehicle.method(arguments)`, e.g. `call usv.start_engine()`");
+                }
+                ast::ActionKind::Swap { a, b, duration } => {
+                    let duration_ms = duration
+                        .as_ref()
+                        .and_then(|d| {
+                            self.expect(d, scope, &Type::DURATION, "a swap's duration")
+                                .expr
+                                .constant()
+                        })
+                        .and_then(|c| c.number())
+                        .unwrap_or(250.0);
+                    out.push(Action::Swap {
+                        a: a.name.clone(),
+                        b: b.name.clone(),
+                        duration_ms,
+                        span,
+                    });
+                }
+                ast::ActionKind::Show { window } => {
+                    out.push(Action::Show { window: window.name.clone(), span })
+                }
+                ast::ActionKind::Hide { window } => {
+                    out.push(Action::Hide { window: window.name.clone(), span })
+                }
+                ast::ActionKind::Alert { level, message } => {
+                    let m = self.expect(message, scope, &Type::STRING, "an alert message");
+                    out.push(Action::Alert { level: level.name.clone(), message: m, span });
+                }
+            }
+        }
+        out
+    }
+
+    // ---- expressions ------------------------------------------------------------------
+
+    fn expect(&mut self, e: &ast::Expr, scope: &Scope, want: &Type, what: &str) -> Bound {
+        let b = self.lower(e, scope);
+        self.check_fits(&b, want, what);
+        Bound::new(b)
+    }
+
+    fn check_fits(&mut self, b: &Expr, want: &Type, what: &str) {
+        if b.ty.fits(want) {
+            if let (Some(have), Some(w)) = (b.ty.unit(), want.unit()) {
+                if have != w {
+                    self.diags
+                        .error(
+                            codes::UNIT_MISMATCH,
+                            b.span,
+                            format!("{what} is in {w}, but this is in {have}"),
+                        )
+                        .label(format!("this is in {have}"));
+                }
+            }
+            return;
+        }
+        if want.is_numeric() && !want.is_lenient() {
+            self.not_a_number(b, what);
+            return;
+        }
+        let d = self.diags.error(
+            codes::TYPE_MISMATCH,
+            b.span,
+            format!("{what} must be a {}, but this is a {}", want.clone().present(), b.ty),
+        );
+        d.label(format!("this is a {}", b.ty));
+        if want.kind == TypeKind::String && b.ty.is_numeric() {
+            d.help("to show a number as text, interpolate it: \"{x}\"");
+        }
+    }
+
+    fn not_a_number(&mut self, b: &Expr, what: &str) {
+        let d = self.diags.error(
+            codes::NOT_A_NUMBER,
+            b.span,
+            format!("a {} is used as a number", b.ty.clone().present()),
+        );
+        d.label(format!("this is a {}", b.ty));
+        if what != "an operand" {
+            d.message =
+                format!("{what} must be a number, but this is a {}", b.ty.clone().present());
+        }
+        if b.ty.kind == TypeKind::Bool {
+            d.help("use `if … then 1 else 0` to turn a condition into a number");
+        }
+    }
+
+    fn condition(&mut self, e: &ast::Expr, scope: &Scope, what: &str) -> Bound {
+        let b = self.lower(e, scope);
+        if !b.ty.is_bool() {
+            self.diags
+                .error(
+                    codes::NOT_BOOL,
+                    b.span,
+                    format!("{what} must be a condition (bool), but this is a {}", b.ty),
+                )
+                .label(format!("this is a {}", b.ty))
+                .help(if b.ty.is_numeric() {
+                    "compare it, e.g. `x > 0`"
+                } else {
+                    "write a comparison or a boolean property"
+                });
+        }
+        Bound::new(b)
+    }
+
+    fn check_showable(&mut self, b: &Expr) {
+        if matches!(b.ty.kind, TypeKind::Object { .. } | TypeKind::Range { .. } | TypeKind::Void) {
+            self.diags
+                .error(codes::TYPE_MISMATCH, b.span, format!("a {} cannot be shown as text", b.ty))
+                .label("not a value");
+        }
+    }
+
+    fn top_let(&mut self, id: DefId) -> Option<Expr> {
+        if let Some(e) = self.top_lets.get(&id) {
+            return Some(e.clone());
+        }
+        let l = let_item(self.modules, id)?;
+        let scope = Scope { module: id.module, limit: Some(id.item), ..Scope::default() };
+        let e = self.lower(&l.value, &scope);
+        self.top_lets.insert(id, e.clone());
+        Some(e)
+    }
+
+    fn path_type(&self, p: &Path) -> Type {
+        let from_root = p.base == PathBase::Root;
+        if from_root && p.segments.is_empty() {
+            return Type::new(TypeKind::Object { object_type: None });
+        }
+        match self.schema.lookup(p.base_type.as_deref(), from_root, &p.segments) {
+            Lookup::Property(prop) => prop.ty(),
+            Lookup::Object(t) => {
+                Type { kind: TypeKind::Object { object_type: Some(t.to_string()) }, absent: true }
+            }
+            Lookup::Method(_) => Type::VOID,
+            Lookup::Untyped | Lookup::Unknown { .. } => Type::DYNAMIC,
+        }
+    }
+
+    fn lower(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
+        let span = e.span;
+        match &e.kind {
+            ExprKind::Number { value, unit } => match unit {
+                Some(LitUnit::Ms) => mk(Type::DURATION, Node::Duration(*value), span),
+                Some(LitUnit::S) => mk(Type::DURATION, Node::Duration(value * 1000.0), span),
+                Some(LitUnit::Min) => mk(Type::DURATION, Node::Duration(value * 60_000.0), span),
+                Some(LitUnit::Px) => {
+                    mk(Type::number_in(Some("px".into())), Node::Number(*value), span)
+                }
+                Some(LitUnit::Deg) => {
+                    mk(Type::number_in(Some("deg".into())), Node::Number(*value), span)
+                }
+                Some(LitUnit::Percent) => {
+                    mk(Type::number_in(Some("%".into())), Node::Number(*value), span)
+                }
+                None => mk(Type::number(), Node::Number(*value), span),
+            },
+            ExprKind::Bool(b) => mk(Type::BOOL, Node::Bool(*b), span),
+            ExprKind::Colour(c) => mk(Type::COLOUR, Node::Colour(*c), span),
+            ExprKind::Str(parts) => self.string(parts, scope, span),
+            ExprKind::SelfRef => match &scope.self_type {
+                Some(t) => mk(
+                    Type { kind: TypeKind::Object { object_type: t.clone() }, absent: true },
+                    Node::Path(Path {
+                        base: PathBase::SelfObject,
+                        segments: vec![],
+                        base_type: t.clone(),
+                    }),
+                    span,
+                ),
+                None => mk(Type::ERROR, Node::Bool(false), span),
+            },
+            ExprKind::Name(n) => {
+                if let Some((_, local)) = scope.locals.iter().rev().find(|(name, _)| name == n) {
+                    return Expr { span, ..local.clone() };
+                }
+                if let Some(id) = self.defs.find_let(self.modules, scope.module, n, scope.limit) {
+                    if let Some(v) = self.top_let(id) {
+                        return Expr { span, ..v };
+                    }
+                }
+                if n == "root" {
+                    return mk(
+                        Type::new(TypeKind::Object { object_type: None }),
+                        Node::Path(Path {
+                            base: PathBase::Root,
+                            segments: vec![],
+                            base_type: None,
+                        }),
+                        span,
+                    );
+                }
+                mk(Type::ERROR, Node::Bool(false), span)
+            }
+            ExprKind::Field(base, field) => {
+                if let ExprKind::Name(ns) = &base.kind {
+                    let shadowed = scope.locals.iter().any(|(n, _)| n == ns)
+                        || self
+                            .defs
+                            .find_let(self.modules, scope.module, ns, scope.limit)
+                            .is_some();
+                    if let (false, Some(target)) =
+                        (shadowed, self.defs.namespace(self.modules, scope.module, ns))
+                    {
+                        let id = self.defs.lets[target].get(&field.name).copied();
+                        return match id.and_then(|id| self.top_let(id)) {
+                            Some(v) => Expr { span, ..v },
+                            None => mk(Type::ERROR, Node::Bool(false), span),
+                        };
+                    }
+                }
+                let b = self.lower(base, scope);
+                self.member(b, field.name.clone(), span, field.span)
+            }
+            ExprKind::Index(base, key) => {
+                let b = self.lower(base, scope);
+                self.member(b, key.clone(), span, span)
+            }
+            ExprKind::Call(callee, args) => {
+                let ExprKind::Name(f) = &callee.kind else {
+                    let c = self.lower(callee, scope);
+                    if c.ty.kind != TypeKind::Error {
+                        self.diags
+                            .error(codes::MISPLACED_CALL, span, "a method call can only be an action")
+                            .help("methods act on the world: use them as `call obj.method(…)` in a button, binding, menu or watch");
+                    }
+                    return mk(Type::ERROR, Node::Bool(false), span);
+                };
+                let args: Vec<Expr> = args.iter().map(|a| self.lower(a, scope)).collect();
+                self.builtin_call(f, args, span, callee.span)
+            }
+            ExprKind::Unary(op, a) => {
+                let a = self.lower(a, scope);
+                let ty = match op {
+                    UnOp::Neg => {
+                        if matches!(a.ty.kind, TypeKind::Duration) {
+                            a.ty.clone()
+                        } else {
+                            if !a.ty.is_numeric() {
+                                self.not_a_number(&a, "an operand");
+                            }
+                            if a.ty.is_numeric() {
+                                Type::number_in(a.ty.unit().map(str::to_string))
+                                    .maybe_absent(a.ty.absent)
+                            } else {
+                                Type::ERROR
+                            }
+                        }
+                    }
+                    UnOp::Not => {
+                        if !a.ty.is_bool() {
+                            self.diags
+                                .error(
+                                    codes::NOT_BOOL,
+                                    a.span,
+                                    format!("`!` needs a condition (bool), but this is a {}", a.ty),
+                                )
+                                .label(format!("this is a {}", a.ty));
+                        }
+                        Type::BOOL.maybe_absent(a.ty.absent)
+                    }
+                };
+                mk(ty, Node::Unary { op: *op, arg: Box::new(a) }, span)
+            }
+            ExprKind::Binary(op, a, b) => {
+                let a = self.lower(a, scope);
+                let b = self.lower(b, scope);
+                let ty = self.binary_type(*op, &a, &b);
+                if *op == BinOp::Range {
+                    return mk(ty, Node::Range { lo: Box::new(a), hi: Box::new(b) }, span);
+                }
+                mk(ty, Node::Binary { op: *op, lhs: Box::new(a), rhs: Box::new(b) }, span)
+            }
+            ExprKind::If(c, a, b) => {
+                let c = self.lower(c, scope);
+                if !c.ty.is_bool() {
+                    self.diags
+                        .error(
+                            codes::NOT_BOOL,
+                            c.span,
+                            format!("the condition of `if` must be a bool, but this is a {}", c.ty),
+                        )
+                        .label(format!("this is a {}", c.ty));
+                }
+                let a = self.lower(a, scope);
+                let b = self.lower(b, scope);
+                let ty = if a.ty.is_lenient() {
+                    b.ty.clone().maybe_absent(a.ty.absent)
+                } else if b.ty.is_lenient() || a.ty.fits(&b.ty) {
+                    a.ty.clone().maybe_absent(b.ty.absent)
+                } else {
+                    self.diags
+                        .error(
+                            codes::TYPE_MISMATCH,
+                            b.span,
+                            format!("the branches of `if` differ: {} and {}", a.ty, b.ty),
+                        )
+                        .label(format!("this is a {}", b.ty));
+                    Type::ERROR
+                };
+                mk(ty, Node::If { cond: Box::new(c), then: Box::new(a), other: Box::new(b) }, span)
+            }
+        }
+    }
+
+    fn member(&mut self, base: Expr, name: String, span: Span, name_span: Span) -> Expr {
+        match base.node {
+            Node::Path(mut p) => {
+                p.segments.push(name);
+                let ty = self.path_type(&p);
+                mk(ty, Node::Path(p), span)
+            }
+            _ if matches!(base.ty.kind, TypeKind::Range { .. })
+                && (name == "min" || name == "max") =>
+            {
+                let ty = Type::number_in(base.ty.unit().map(str::to_string))
+                    .maybe_absent(base.ty.absent);
+                let max = name == "max";
+                mk(ty, Node::RangeEnd { range: Box::new(base), max }, span)
+            }
+            _ if base.ty.kind == TypeKind::Error => base,
+            _ => {
+                let d = self.diags.error(
+                    codes::TYPE_MISMATCH,
+                    name_span,
+                    format!("a {} has no member `{name}`", base.ty),
+                );
+                if matches!(base.ty.kind, TypeKind::Range { .. }) {
+                    d.help("a range has `.min` and `.max`");
+                }
+                mk(Type::ERROR, Node::Bool(false), span)
+            }
+        }
+    }
+
+    fn builtin_call(&mut self, f: &str, args: Vec<Expr>, span: Span, name_span: Span) -> Expr {
+        let Some(def) = builtins::function(f) else {
+            return mk(Type::ERROR, Node::Bool(false), span);
+        };
+        if args.len() != def.params.len() {
+            self.diags
+                .error(
+                    codes::ARG_COUNT,
+                    name_span,
+                    format!(
+                        "`{f}` takes {} argument{}, but {} {} given",
+                        def.params.len(),
+                        if def.params.len() == 1 { "" } else { "s" },
+                        args.len(),
+                        if args.len() == 1 { "was" } else { "were" }
+                    ),
+                )
+                .help(format!("{f}: {}", def.doc));
+        }
+        let mut absent = false;
+        for (a, kind) in args.iter().zip(def.params.bytes()) {
+            absent |= a.ty.absent;
+            match kind {
+                b'n' if !a.ty.is_numeric() => {
+                    self.not_a_number(a, &format!("an argument of `{f}`"))
+                }
+                b's' if !a.ty.fits(&Type::STRING) => {
+                    self.diags.error(
+                        codes::TYPE_MISMATCH,
+                        a.span,
+                        format!("an argument of `{f}` must be a string, but this is a {}", a.ty),
+                    );
+                }
+                _ => {}
+            }
+        }
+        if f == "format" {
+            if let Some(Expr { node: Node::Str(spec), span, .. }) = args.get(1) {
+                if parse_spec(spec).is_none() {
+                    self.bad_spec(*span, spec);
+                }
+            }
+        }
+        let first_unit = args.first().and_then(|a| a.ty.unit().map(str::to_string));
+        let ty = match def.returns {
+            Returns::SameUnit => Type::number_in(first_unit),
+            Returns::Unitless => Type::number(),
+            Returns::Unit(u) => Type::number_in(Some(u.to_string())),
+            Returns::String => Type::STRING,
+            Returns::Colour => Type::COLOUR,
+            Returns::Bool => {
+                absent = false;
+                Type::BOOL
+            }
+        };
+        mk(ty.maybe_absent(absent), Node::Call { function: f.to_string(), args }, span)
+    }
+
+    fn bad_spec(&mut self, span: Span, spec: &str) {
+        self.diags
+            .error(codes::BAD_FORMAT, span, format!("`{spec}` is not a format spec"))
+            .help("a spec is `[0][width][.digits]`, e.g. `.1` (one decimal) or `03.0` (three digits, zero-padded)");
+    }
+
+    fn string(&mut self, parts: &[StrPart], scope: &Scope, span: Span) -> Expr {
+        if let [StrPart::Text(t)] = parts {
+            return mk(Type::STRING, Node::Str(t.clone()), span);
+        }
+        if parts.is_empty() {
+            return mk(Type::STRING, Node::Str(String::new()), span);
+        }
+        let mut out = Vec::new();
+        let mut absent = false;
+        for p in parts {
+            match p {
+                StrPart::Text(t) => out.push(FormatPart::Text(t.clone())),
+                StrPart::Interp { expr, spec } => {
+                    let e = self.lower(expr, scope);
+                    self.check_showable(&e);
+                    absent |= e.ty.absent;
+                    let spec = spec.as_ref().and_then(|(s, sp)| {
+                        let parsed = parse_spec(s);
+                        if parsed.is_none() {
+                            self.bad_spec(*sp, s);
+                        }
+                        parsed
+                    });
+                    out.push(FormatPart::Value { expr: e, spec });
+                }
+            }
+        }
+        // An interpolated string is never absent: an absent value shows as "—".
+        let _ = absent;
+        mk(Type::STRING, Node::Format(out), span)
+    }
+
+    fn binary_type(&mut self, op: BinOp, a: &Expr, b: &Expr) -> Type {
+        let absent = a.ty.absent || b.ty.absent;
+        let lenient = a.ty.is_lenient() || b.ty.is_lenient();
+        match op {
+            BinOp::Coalesce => {
+                if !lenient && !a.ty.fits(&b.ty) {
+                    self.diags
+                        .error(codes::TYPE_MISMATCH, b.span, format!("the default after `??` must be a {} like the value before it, but this is a {}", a.ty.clone().present(), b.ty))
+                        .label(format!("this is a {}", b.ty));
+                    return Type::ERROR;
+                }
+                let base = if a.ty.is_lenient() { b.ty.clone() } else { a.ty.clone() };
+                let mut t = base.present().maybe_absent(b.ty.absent);
+                if let (TypeKind::Number { unit: None }, Some(u)) = (&t.kind, b.ty.unit()) {
+                    t.kind = TypeKind::Number { unit: Some(u.to_string()) };
+                }
+                t
+            }
+            BinOp::And | BinOp::Or => {
+                for x in [a, b] {
+                    if !x.ty.is_bool() {
+                        self.diags
+                            .error(
+                                codes::NOT_BOOL,
+                                x.span,
+                                format!(
+                                    "`{}` needs conditions (bool), but this is a {}",
+                                    op.symbol(),
+                                    x.ty
+                                ),
+                            )
+                            .label(format!("this is a {}", x.ty));
+                    }
+                }
+                Type::BOOL.maybe_absent(absent)
+            }
+            BinOp::Eq | BinOp::Ne => {
+                if !lenient && !a.ty.fits(&b.ty) {
+                    self.diags.error(
+                        codes::TYPE_MISMATCH,
+                        op_span(a, b),
+                        format!("cannot compare a {} with a {}", a.ty, b.ty),
+                    );
+                } else {
+                    self.same_unit(op, a, b);
+                }
+                Type::BOOL.maybe_absent(absent)
+            }
+            BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge => {
+                let durations = a.ty.kind == TypeKind::Duration && b.ty.kind == TypeKind::Duration;
+                if !durations {
+                    self.numeric_operands(a, b);
+                    self.same_unit(op, a, b);
+                }
+                Type::BOOL.maybe_absent(absent)
+            }
+            BinOp::Add | BinOp::Sub => {
+                if a.ty.kind == TypeKind::Duration
+                    && (b.ty.kind == TypeKind::Duration || b.ty.is_lenient())
+                {
+                    return Type::DURATION.maybe_absent(absent);
+                }
+                if a.ty.kind == TypeKind::String || b.ty.kind == TypeKind::String {
+                    let s = if a.ty.kind == TypeKind::String { a } else { b };
+                    self.diags
+                        .error(
+                            codes::NOT_A_NUMBER,
+                            s.span,
+                            format!("a string is used as a number in `{}`", op.symbol()),
+                        )
+                        .label("this is a string")
+                        .help("to join text, interpolate: \"{a} {b}\"");
+                    return Type::ERROR;
+                }
+                self.numeric_operands(a, b);
+                let unit = self.same_unit(op, a, b);
+                Type::number_in(unit).maybe_absent(absent)
+            }
+            BinOp::Mul | BinOp::Div => {
+                if a.ty.kind == TypeKind::Duration && b.ty.is_numeric() {
+                    return Type::DURATION.maybe_absent(absent);
+                }
+                self.numeric_operands(a, b);
+                Type::number().maybe_absent(absent)
+            }
+            BinOp::Range => {
+                self.numeric_operands(a, b);
+                let unit = self.same_unit(op, a, b);
+                Type::new(TypeKind::Range { unit }).maybe_absent(absent)
+            }
+        }
+    }
+
+    fn numeric_operands(&mut self, a: &Expr, b: &Expr) {
+        for x in [a, b] {
+            if !x.ty.is_numeric() {
+                self.not_a_number(x, "an operand");
+            }
+        }
+    }
+
+    /// Checks that both sides have the same unit when both have one; returns the result unit.
+    fn same_unit(&mut self, op: BinOp, a: &Expr, b: &Expr) -> Option<String> {
+        match (a.ty.unit(), b.ty.unit()) {
+            (Some(x), Some(y)) if x != y => {
+                self.diags
+                    .error(
+                        codes::UNIT_MISMATCH,
+                        op_span(a, b),
+                        format!("`{}` of {x} and {y}", op.symbol()),
+                    )
+                    .label(format!("{x} {} {y}", op.symbol()))
+                    .help(format!(
+                        "convert one side first, e.g. multiply by a factor, so both are in {x}"
+                    ));
+                None
+            }
+            (Some(x), _) | (_, Some(x)) => Some(x.to_string()),
+            _ => None,
+        }
+    }
+}
+
+fn op_span(a: &Expr, b: &Expr) -> Span {
+    a.span.to(b.span)
+}
+
+/// Parses `[0][width][.precision]`.
+pub fn parse_spec(s: &str) -> Option<FormatSpec> {
+    let (int, prec) = match s.split_once('.') {
+        Some((i, p)) => (i, Some(p)),
+        None => (s, None),
+    };
+    if !int.chars().all(|c| c.is_ascii_digit())
+        || prec.is_some_and(|p| p.is_empty() || !p.chars().all(|c| c.is_ascii_digit()))
+    {
+        return None;
+    }
+    Some(FormatSpec {
+        zero: int.starts_with('0') && int.len() > 1,
+        width: if int.is_empty() { None } else { int.parse().ok() },
+        precision: match prec {
+            Some(p) => Some(p.parse().ok()?),
+            None => None,
+        },
+    })
+}

@@ -1,0 +1,446 @@
+//! Pass 3: every name used resolves. Reports unknown names and functions (E0204), unknown
+//! components (E0205), windows (E0206), input devices and inputs (E0207), parameters and
+//! events (E0208) and missing required arguments (E0209). Records which `let`s are used, for
+//! `warn_unused`. Runs after `collect_definitions` (it needs the tables) and before
+//! `check_types`, which can then treat an unresolved name as already reported.
+
+use super::{DefId, Definitions, ModuleId, Modules, component_item};
+use crate::ast::*;
+use crate::builtins;
+use crate::codes;
+use crate::diagnostics::Diagnostics;
+use std::collections::HashSet;
+
+/// The spans of `let` names that some expression reads.
+pub type UsedLets = HashSet<crate::source::Span>;
+
+pub fn resolve_names(modules: &Modules, defs: &Definitions, diags: &mut Diagnostics) -> UsedLets {
+    let mut r = Resolver { modules, defs, diags, used: HashSet::new() };
+    for m in 0..modules.len() {
+        r.module(m);
+    }
+    r.used
+}
+
+struct Resolver<'a, 'd> {
+    modules: &'a Modules,
+    defs: &'a Definitions,
+    diags: &'d mut Diagnostics,
+    used: UsedLets,
+}
+
+#[derive(Clone, Default)]
+struct Scope {
+    module: ModuleId,
+    limit: Option<usize>,
+    locals: Vec<(String, Option<crate::source::Span>)>,
+    self_ok: bool,
+}
+
+impl Scope {
+    fn with(&self, name: &str, let_span: Option<crate::source::Span>) -> Scope {
+        let mut s = self.clone();
+        s.locals.push((name.to_string(), let_span));
+        s
+    }
+}
+
+impl Resolver<'_, '_> {
+    fn module(&mut self, m: ModuleId) {
+        let base = Scope { module: m, ..Scope::default() };
+        for (i, item) in self.modules[m].ast.items.iter().enumerate() {
+            self.item(item, &base, Some(i));
+        }
+    }
+
+    fn item(&mut self, item: &Item, scope: &Scope, index: Option<usize>) {
+        match item {
+            Item::Use(_) => {}
+            Item::Let(l) => {
+                let s = Scope { limit: index, ..scope.clone() };
+                self.expr(&l.value, &s);
+            }
+            Item::Window(w) => {
+                w.rect.iter().flatten().for_each(|e| self.expr(e, scope));
+                for p in &w.props {
+                    if builtins::window_prop_type(&p.name.name).is_none() {
+                        self.diags
+                            .error(
+                                codes::UNKNOWN_PARAM,
+                                p.name.span,
+                                format!("a window has no property `{}`", p.name.name),
+                            )
+                            .suggest(&p.name.name, builtins::WINDOW_PROPS.iter().copied());
+                    }
+                    self.expr(&p.value, scope);
+                }
+            }
+            Item::In(b) => {
+                self.window_ref(&b.window, scope.module);
+                for w in &b.widgets {
+                    self.widget(w, scope);
+                }
+            }
+            Item::Component(c) => self.component(c, scope.module),
+            Item::Bind(b) => self.bind(b, scope),
+            Item::Menu(menu) => {
+                let s = Scope { self_ok: true, ..scope.clone() };
+                for e in &menu.entries {
+                    self.expr(&e.label, &s);
+                    if let Some(en) = &e.enabled {
+                        self.expr(en, &s);
+                    }
+                    self.actions(&e.actions, &s);
+                }
+            }
+            Item::Watch(w) => {
+                self.expr(&w.when, scope);
+                if let Some(h) = &w.hold {
+                    self.expr(h, scope);
+                }
+                self.actions(&w.actions, scope);
+            }
+            Item::Each(e) => {
+                self.expr(&e.source, scope);
+                let mut s = scope.with(&e.var.name, None).with("index", None);
+                for inner in &e.items {
+                    self.item(inner, &s, None);
+                    if let Item::Let(l) = inner {
+                        s = s.with(&l.name.name, Some(l.name.span));
+                    }
+                }
+            }
+        }
+    }
+
+    fn window_ref(&mut self, w: &Ident, m: ModuleId) {
+        if self.defs.find_window(self.modules, m, &w.name).is_none() {
+            self.diags
+                .error(codes::UNKNOWN_WINDOW, w.span, format!("there is no window `{}`", w.name))
+                .suggest(
+                    &w.name,
+                    self.defs.visible_windows(self.modules, m).iter().map(String::as_str),
+                );
+        }
+    }
+
+    fn widget(&mut self, w: &Widget, scope: &Scope) {
+        if let Some((at, _)) = &w.at {
+            at.iter().for_each(|e| self.expr(e, scope));
+        }
+        let m = scope.module;
+        // The component's parameter names, whether each is required, and its events.
+        let signature: Option<(Vec<(String, bool)>, Vec<String>)> = if let Some(n) =
+            builtins::native(&w.component.name)
+        {
+            Some((
+                n.params.iter().map(|(p, _, d)| (p.to_string(), !d)).collect(),
+                n.events.iter().map(|e| e.to_string()).collect(),
+            ))
+        } else if let Some(id) = self.defs.find_component(self.modules, m, &w.component.name) {
+            component_item(self.modules, id).map(|c| {
+                let mut params = Vec::new();
+                let mut events = Vec::new();
+                for p in &c.params {
+                    match p {
+                        Param::Value { name, default, .. } => {
+                            params.push((name.name.clone(), default.is_none()))
+                        }
+                        Param::Event { name } => events.push(name.name.clone()),
+                    }
+                }
+                (params, events)
+            })
+        } else {
+            self.diags
+                .error(codes::UNKNOWN_COMPONENT, w.component.span, format!("there is no component `{}`", w.component.name))
+                .suggest(&w.component.name, self.defs.visible_components(self.modules, m).iter().map(String::as_str))
+                .help.get_or_insert_with(|| "define it with `component`, or `use` the file that defines it (e.g. \"stdlib/gauges.mocu\")".into());
+            None
+        };
+        let mut arg_scope = scope.clone();
+        if let Some((params, _)) = &signature {
+            for (p, _) in params {
+                arg_scope = arg_scope.with(p, None);
+            }
+        }
+        for a in &w.args {
+            if let Some((params, _)) = &signature {
+                if a.name.name != "visible" && !params.iter().any(|(p, _)| *p == a.name.name) {
+                    self.diags
+                        .error(
+                            codes::UNKNOWN_PARAM,
+                            a.name.span,
+                            format!("`{}` has no parameter `{}`", w.component.name, a.name.name),
+                        )
+                        .suggest(&a.name.name, params.iter().map(|(p, _)| p.as_str()));
+                }
+            }
+            self.expr(&a.value, &arg_scope);
+        }
+        if let Some((params, events)) = &signature {
+            for (p, required) in params {
+                if *required && !w.args.iter().any(|a| a.name.name == *p) {
+                    self.diags
+                        .error(
+                            codes::MISSING_ARG,
+                            w.component.span,
+                            format!("`{}` needs the argument `{p}`", w.component.name),
+                        )
+                        .help(format!("add `{p} …` inside the braces"));
+                }
+            }
+            for h in &w.handlers {
+                if !events.contains(&h.event.name) {
+                    self.diags
+                        .error(
+                            codes::UNKNOWN_PARAM,
+                            h.event.span,
+                            format!("`{}` has no event `{}`", w.component.name, h.event.name),
+                        )
+                        .suggest(&h.event.name, events.iter().map(String::as_str));
+                }
+            }
+        }
+        for h in &w.handlers {
+            self.actions(&h.actions, scope);
+        }
+    }
+
+    fn component(&mut self, c: &Component, m: ModuleId) {
+        let mut s = Scope { module: m, ..Scope::default() }.with("w", None).with("h", None);
+        for p in &c.params {
+            if let Param::Value { default: Some(d), .. } = p {
+                self.expr(d, &Scope { module: m, ..Scope::default() });
+            }
+            s = s.with(&p.name().name, None);
+        }
+        for stmt in &c.body {
+            match stmt {
+                Stmt::Let(l) => {
+                    self.expr(&l.value, &s);
+                    s = s.with(&l.name.name, Some(l.name.span));
+                }
+                Stmt::Primitive(p) => {
+                    p.args.iter().for_each(|e| self.expr(e, &s));
+                    p.styles.iter().for_each(|st| self.expr(&st.value, &s));
+                }
+            }
+        }
+    }
+
+    fn bind(&mut self, b: &Bind, scope: &Scope) {
+        let Some((_, kinds)) = builtins::DEVICES.iter().find(|(d, _)| *d == b.device.name) else {
+            self.diags
+                .error(
+                    codes::UNKNOWN_INPUT,
+                    b.device.span,
+                    format!("there is no input device `{}`", b.device.name),
+                )
+                .suggest(&b.device.name, builtins::DEVICES.iter().map(|(d, _)| *d))
+                .help
+                .get_or_insert_with(|| "devices are `gamepad`, `keyboard` and `mouse`".into());
+            return;
+        };
+        for bnd in &b.bindings {
+            match kinds.iter().find(|(k, _)| *k == bnd.kind.name) {
+                None => {
+                    self.diags
+                        .error(
+                            codes::UNKNOWN_INPUT,
+                            bnd.kind.span,
+                            format!("a {} has no `{}` inputs", b.device.name, bnd.kind.name),
+                        )
+                        .suggest(&bnd.kind.name, kinds.iter().map(|(k, _)| *k));
+                }
+                Some((kind, names)) => {
+                    let ok = if *kind == "key" {
+                        builtins::is_key(&bnd.input.name)
+                    } else {
+                        names.contains(&bnd.input.name.as_str())
+                    };
+                    if !ok {
+                        let d = self.diags.error(
+                            codes::UNKNOWN_INPUT,
+                            bnd.input.span,
+                            format!("there is no {} {kind} `{}`", b.device.name, bnd.input.name),
+                        );
+                        if *kind == "key" {
+                            d.help("keys are letters, digits, F1…F12 or a name such as `space`, `enter`, `escape`, `up`");
+                        } else {
+                            d.suggest(&bnd.input.name, names.iter().copied());
+                        }
+                    }
+                }
+            }
+            let s = match builtins::binding_value(&bnd.kind.name) {
+                Some(v) => scope.with(v, None),
+                None => scope.clone(),
+            };
+            self.actions(&bnd.actions, &s);
+        }
+    }
+
+    fn actions(&mut self, actions: &[Action], scope: &Scope) {
+        for a in actions {
+            match &a.kind {
+                ActionKind::Set { target, value } => {
+                    self.expr(target, scope);
+                    self.expr(value, scope);
+                }
+                ActionKind::Call { call } => self.expr(call, scope),
+                ActionKind::Swap { a, b, duration } => {
+                    self.window_ref(a, scope.module);
+                    self.window_ref(b, scope.module);
+                    if let Some(d) = duration {
+                        self.expr(d, scope);
+                    }
+                }
+                ActionKind::Show { window } | ActionKind::Hide { window } => {
+                    self.window_ref(window, scope.module)
+                }
+                ActionKind::Alert { level, message } => {
+                    if !builtins::ALERT_LEVELS.contains(&level.name.as_str()) {
+                        self.diags
+                            .error(
+                                codes::UNKNOWN_NAME,
+                                level.span,
+                                format!("there is no alert level `{}`", level.name),
+                            )
+                            .suggest(&level.name, builtins::ALERT_LEVELS.iter().copied())
+                            .help
+                            .get_or_insert_with(|| {
+                                "alert levels are `info`, `warning` and `critical`".into()
+                            });
+                    }
+                    self.expr(message, scope);
+                }
+            }
+        }
+    }
+
+    fn name(&mut self, name: &str, span: crate::source::Span, scope: &Scope) {
+        if let Some((_, let_span)) = scope.locals.iter().rev().find(|(n, _)| n == name) {
+            if let Some(s) = let_span {
+                self.used.insert(*s);
+            }
+            return;
+        }
+        if let Some(id) = self.defs.find_let(self.modules, scope.module, name, scope.limit) {
+            self.mark(id);
+            return;
+        }
+        if name == "root" {
+            return;
+        }
+        if self.defs.namespace(self.modules, scope.module, name).is_some() {
+            self.diags
+                .error(codes::UNKNOWN_NAME, span, format!("`{name}` is a namespace, not a value"))
+                .help(format!("name one of its definitions: `{name}.something`"));
+            return;
+        }
+        let mut candidates = self.defs.visible_names(self.modules, scope.module);
+        candidates.extend(scope.locals.iter().map(|(n, _)| n.clone()));
+        let d = self.diags.error(codes::UNKNOWN_NAME, span, format!("unknown name `{name}`"));
+        d.label("not found in this scope").suggest(name, candidates.iter().map(String::as_str));
+        if d.help.is_none() {
+            if let (Some(l), Some(_)) = (scope.limit, self.defs.lets[scope.module].get(name)) {
+                let _ = l;
+                d.help(format!(
+                    "`{name}` is defined further down: a `let` can only use the lets above it"
+                ));
+            } else {
+                d.help("world-model paths start at `root`, e.g. `root.vehicles.usv1.nav.speed`");
+            }
+        }
+    }
+
+    fn mark(&mut self, id: DefId) {
+        if let Some(l) = super::let_item(self.modules, id) {
+            self.used.insert(l.name.span);
+        }
+    }
+
+    fn expr(&mut self, e: &Expr, scope: &Scope) {
+        match &e.kind {
+            ExprKind::Name(n) => self.name(n, e.span, scope),
+            ExprKind::SelfRef => {
+                if !scope.self_ok {
+                    self.diags
+                        .error(codes::UNKNOWN_NAME, e.span, "`self` is only known inside a `menu`")
+                        .help("`self` is the object the menu was opened on");
+                }
+            }
+            ExprKind::Field(base, field) => {
+                if let ExprKind::Name(ns) = &base.kind {
+                    let shadowed = scope.locals.iter().any(|(n, _)| n == ns)
+                        || self
+                            .defs
+                            .find_let(self.modules, scope.module, ns, scope.limit)
+                            .is_some();
+                    if let (false, Some(target)) =
+                        (shadowed, self.defs.namespace(self.modules, scope.module, ns))
+                    {
+                        match self.defs.lets[target].get(&field.name) {
+                            Some(id) => self.mark(*id),
+                            None => {
+                                self.diags
+                                    .error(
+                                        codes::UNKNOWN_NAME,
+                                        field.span,
+                                        format!("`{ns}` has no `{}`", field.name),
+                                    )
+                                    .suggest(
+                                        &field.name,
+                                        self.defs.lets[target].keys().map(String::as_str),
+                                    );
+                            }
+                        }
+                        return;
+                    }
+                }
+                self.expr(base, scope);
+            }
+            ExprKind::Index(base, _) => self.expr(base, scope),
+            ExprKind::Call(callee, args) => {
+                match &callee.kind {
+                    ExprKind::Name(f) => {
+                        if builtins::function(f).is_none() {
+                            self.diags
+                                .error(
+                                    codes::UNKNOWN_NAME,
+                                    callee.span,
+                                    format!("unknown function `{f}`"),
+                                )
+                                .suggest(f, builtins::FUNCTIONS.iter().map(|f| f.name))
+                                .help
+                                .get_or_insert_with(|| {
+                                    "see docs/language.md, \"Built-in functions\"".into()
+                                });
+                        }
+                    }
+                    _ => self.expr(callee, scope),
+                }
+                args.iter().for_each(|a| self.expr(a, scope));
+            }
+            ExprKind::Unary(_, a) => self.expr(a, scope),
+            ExprKind::Binary(_, a, b) => {
+                self.expr(a, scope);
+                self.expr(b, scope);
+            }
+            ExprKind::If(c, a, b) => {
+                self.expr(c, scope);
+                self.expr(a, scope);
+                self.expr(b, scope);
+            }
+            ExprKind::Str(parts) => {
+                for p in parts {
+                    if let StrPart::Interp { expr, .. } = p {
+                        self.expr(expr, scope);
+                    }
+                }
+            }
+            ExprKind::Number { .. } | ExprKind::Colour(_) | ExprKind::Bool(_) => {}
+        }
+    }
+}

@@ -1,0 +1,49 @@
+//! Warning W0001: a `let` that nothing reads. A file without windows, widgets or bindings is a
+//! library (like stdlib/theme.mocu): its top-level lets are exports and are not reported.
+//! Runs after `resolve_names`, which records the uses.
+
+use super::Modules;
+use super::resolve_names::UsedLets;
+use crate::ast::{Item, Stmt};
+use crate::codes;
+use crate::diagnostics::Diagnostics;
+
+pub fn warn_unused(modules: &Modules, used: &UsedLets, diags: &mut Diagnostics) {
+    for module in modules {
+        let library = !module.ast.items.iter().any(|i| {
+            matches!(
+                i,
+                Item::Window(_) | Item::In(_) | Item::Bind(_) | Item::Each(_) | Item::Watch(_)
+            )
+        });
+        for item in &module.ast.items {
+            match item {
+                Item::Let(l) if !library => report(&l.name, used, diags),
+                Item::Component(c) => {
+                    for s in &c.body {
+                        if let Stmt::Let(l) = s {
+                            report(&l.name, used, diags);
+                        }
+                    }
+                }
+                Item::Each(e) => {
+                    for i in &e.items {
+                        if let Item::Let(l) = i {
+                            report(&l.name, used, diags);
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+}
+
+fn report(name: &crate::ast::Ident, used: &UsedLets, diags: &mut Diagnostics) {
+    if !used.contains(&name.span) && !name.name.starts_with('_') {
+        diags
+            .warning(codes::UNUSED_LET, name.span, format!("`{}` is never used", name.name))
+            .label("unused")
+            .help(format!("remove it, or name it `_{}` to keep it", name.name));
+    }
+}

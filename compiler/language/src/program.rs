@@ -1,0 +1,483 @@
+//! The checked program: what the compiler hands to the runtime. Every expression is typed and
+//! carries its span; every bound expression lists its paths, which is its subscription set.
+//! Names are resolved: `let`s are inlined, component parameters are [`Node::Param`],
+//! template variables and `self` are path bases. This is what a bundle stores (serde).
+
+use crate::ast::{BinOp, UnOp};
+use crate::source::Span;
+use crate::types::Type;
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// One checked layout file and everything it uses.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Program {
+    /// The layout's path (as given), then the files it uses.
+    pub files: Vec<String>,
+    pub windows: Vec<Window>,
+    pub widgets: Vec<Widget>,
+    pub components: Vec<Component>,
+    pub bindings: Vec<Binding>,
+    pub menus: Vec<Menu>,
+    pub watches: Vec<Watch>,
+    pub templates: Vec<Template>,
+}
+
+/// An expression bound to the world model: its typed tree and the paths it reads.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bound {
+    pub expr: Expr,
+    /// The subscription set: every path the expression reads, once, in order of appearance.
+    pub paths: Vec<Path>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Expr {
+    pub ty: Type,
+    pub node: Node,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Node {
+    Number(f64),
+    Bool(bool),
+    Str(String),
+    /// RGBA, 8 bits each.
+    Colour(u32),
+    /// Milliseconds.
+    Duration(f64),
+    Path(Path),
+    /// A component parameter (in a component body) or a sibling argument (in a widget).
+    Param(String),
+    /// The widget's width `w` or height `h` in a component body.
+    Size(String),
+    /// A binding's implicit value: `axis` or `delta`.
+    Input(String),
+    /// The 0-based position of a template instance.
+    Index,
+    /// `.min` / `.max` of a range.
+    RangeEnd {
+        range: Box<Expr>,
+        max: bool,
+    },
+    Range {
+        lo: Box<Expr>,
+        hi: Box<Expr>,
+    },
+    Unary {
+        op: UnOp,
+        arg: Box<Expr>,
+    },
+    Binary {
+        op: BinOp,
+        lhs: Box<Expr>,
+        rhs: Box<Expr>,
+    },
+    If {
+        cond: Box<Expr>,
+        then: Box<Expr>,
+        other: Box<Expr>,
+    },
+    Call {
+        function: String,
+        args: Vec<Expr>,
+    },
+    /// An interpolated string.
+    Format(Vec<FormatPart>),
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FormatPart {
+    Text(String),
+    Value { expr: Expr, spec: Option<FormatSpec> },
+}
+
+/// `{x:03.1}`: zero padding, minimum width, digits after the point.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FormatSpec {
+    pub zero: bool,
+    pub width: Option<u32>,
+    pub precision: Option<u32>,
+}
+
+/// A dotted path: a base and property/object names. `root.vehicles["USV 1"].nav.speed`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Path {
+    pub base: PathBase,
+    pub segments: Vec<String>,
+    /// The schema type of the base object, when known (for `self` and template variables).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub base_type: Option<String>,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PathBase {
+    Root,
+    /// `self` in a menu: the object the menu was opened on.
+    SelfObject,
+    /// A `for each` variable: one object per template instance.
+    Var(String),
+    /// A component parameter of type object.
+    Param(String),
+}
+
+impl fmt::Display for Path {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.base {
+            PathBase::Root => f.write_str("root")?,
+            PathBase::SelfObject => f.write_str("self")?,
+            PathBase::Var(v) | PathBase::Param(v) => f.write_str(v)?,
+        }
+        for s in &self.segments {
+            if !s.is_empty()
+                && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                && !s.starts_with(|c: char| c.is_ascii_digit())
+            {
+                write!(f, ".{s}")?;
+            } else {
+                write!(f, "[{s:?}]")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Window {
+    pub name: String,
+    /// The module that paints it: "layer" (widgets only), "video", "map", ….
+    pub kind: String,
+    pub layer: Bound,
+    /// x, y, width, height; numbers in px, or with unit "%" of the screen.
+    pub rect: Vec<Bound>,
+    pub opacity: Bound,
+    pub visible: Bound,
+    pub source: Option<Bound>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Widget {
+    pub name: Option<String>,
+    pub window: String,
+    pub component: String,
+    /// Drawn by Rust (Video, Map, VehicleList) rather than by a component body.
+    pub native: bool,
+    /// x, y and optionally width, height in the window's px.
+    pub at: Vec<Bound>,
+    /// Every parameter of the component, defaults filled in.
+    pub args: Vec<Arg>,
+    pub visible: Option<Bound>,
+    pub handlers: Vec<Handler>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Arg {
+    pub name: String,
+    pub value: Bound,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Handler {
+    pub event: String,
+    pub actions: Vec<Action>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Component {
+    pub name: String,
+    pub params: Vec<Param>,
+    pub events: Vec<String>,
+    pub shapes: Vec<Shape>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Param {
+    pub name: String,
+    pub ty: Type,
+    pub default: Option<Bound>,
+}
+
+/// One drawing primitive: rect, rounded, circle, arc, line, polyline, text, image.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Shape {
+    pub kind: String,
+    pub args: Vec<Bound>,
+    pub styles: Vec<Arg>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Binding {
+    pub device: String,
+    pub kind: String,
+    pub input: String,
+    pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Menu {
+    pub object_type: String,
+    pub items: Vec<MenuItem>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MenuItem {
+    pub label: Bound,
+    pub enabled: Option<Bound>,
+    pub actions: Vec<Action>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Watch {
+    pub name: String,
+    pub when: Bound,
+    /// How long `when` must hold before the actions run, in milliseconds.
+    pub hold_ms: Option<f64>,
+    pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+/// `for each v in root.vehicles of type "usv" { … }`: instantiated once per matching child.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Template {
+    pub var: String,
+    /// The object whose children are iterated.
+    pub source: Path,
+    pub object_type: Option<String>,
+    pub windows: Vec<Window>,
+    pub widgets: Vec<Widget>,
+    pub watches: Vec<Watch>,
+    pub span: Span,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "action")]
+pub enum Action {
+    /// Writes an operator goal property.
+    Set {
+        target: Path,
+        value: Bound,
+        span: Span,
+    },
+    /// Calls a world-model method; `target` ends with the method name.
+    Call {
+        target: Path,
+        args: Vec<Bound>,
+        span: Span,
+    },
+    Swap {
+        a: String,
+        b: String,
+        duration_ms: f64,
+        span: Span,
+    },
+    Show {
+        window: String,
+        span: Span,
+    },
+    Hide {
+        window: String,
+        span: Span,
+    },
+    Alert {
+        level: String,
+        message: Bound,
+        span: Span,
+    },
+}
+
+impl Bound {
+    /// Wraps an expression, collecting its paths.
+    pub fn new(expr: Expr) -> Bound {
+        let mut paths = Vec::new();
+        expr.collect_paths(&mut paths);
+        Bound { expr, paths }
+    }
+}
+
+impl Expr {
+    fn collect_paths(&self, out: &mut Vec<Path>) {
+        match &self.node {
+            Node::Path(p) => {
+                if !out.contains(p) {
+                    out.push(p.clone());
+                }
+            }
+            Node::RangeEnd { range, .. } => range.collect_paths(out),
+            Node::Range { lo, hi } => {
+                lo.collect_paths(out);
+                hi.collect_paths(out);
+            }
+            Node::Unary { arg, .. } => arg.collect_paths(out),
+            Node::Binary { lhs, rhs, .. } => {
+                lhs.collect_paths(out);
+                rhs.collect_paths(out);
+            }
+            Node::If { cond, then, other } => {
+                cond.collect_paths(out);
+                then.collect_paths(out);
+                other.collect_paths(out);
+            }
+            Node::Call { args, .. } => args.iter().for_each(|a| a.collect_paths(out)),
+            Node::Format(parts) => parts.iter().for_each(|p| {
+                if let FormatPart::Value { expr, .. } = p {
+                    expr.collect_paths(out)
+                }
+            }),
+            _ => {}
+        }
+    }
+
+    /// The value when the expression is a constant (no paths, params or inputs), as far as
+    /// simple folding goes; `None` otherwise.
+    pub fn constant(&self) -> Option<Const> {
+        Some(match &self.node {
+            Node::Number(n) | Node::Duration(n) => Const::Number(*n),
+            Node::Bool(b) => Const::Bool(*b),
+            Node::Unary { op: UnOp::Neg, arg } => Const::Number(-arg.constant()?.number()?),
+            Node::Unary { op: UnOp::Not, arg } => Const::Bool(!arg.constant()?.bool()?),
+            Node::Binary { op, lhs, rhs } => {
+                let (a, b) = (lhs.constant()?, rhs.constant()?);
+                match (op, a, b) {
+                    (BinOp::Add, Const::Number(a), Const::Number(b)) => Const::Number(a + b),
+                    (BinOp::Sub, Const::Number(a), Const::Number(b)) => Const::Number(a - b),
+                    (BinOp::Mul, Const::Number(a), Const::Number(b)) => Const::Number(a * b),
+                    (BinOp::Div, Const::Number(a), Const::Number(b)) => Const::Number(a / b),
+                    (BinOp::Lt, Const::Number(a), Const::Number(b)) => Const::Bool(a < b),
+                    (BinOp::Le, Const::Number(a), Const::Number(b)) => Const::Bool(a <= b),
+                    (BinOp::Gt, Const::Number(a), Const::Number(b)) => Const::Bool(a > b),
+                    (BinOp::Ge, Const::Number(a), Const::Number(b)) => Const::Bool(a >= b),
+                    (BinOp::Eq, a, b) => Const::Bool(a == b),
+                    (BinOp::Ne, a, b) => Const::Bool(a != b),
+                    (BinOp::And, Const::Bool(a), Const::Bool(b)) => Const::Bool(a && b),
+                    (BinOp::Or, Const::Bool(a), Const::Bool(b)) => Const::Bool(a || b),
+                    _ => return None,
+                }
+            }
+            Node::If { cond, then, other } => {
+                if cond.constant()?.bool()? {
+                    then.constant()?
+                } else {
+                    other.constant()?
+                }
+            }
+            _ => return None,
+        })
+    }
+}
+
+/// A folded constant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Const {
+    Number(f64),
+    Bool(bool),
+}
+
+impl Const {
+    pub fn number(self) -> Option<f64> {
+        if let Const::Number(n) = self { Some(n) } else { None }
+    }
+    pub fn bool(self) -> Option<bool> {
+        if let Const::Bool(b) = self { Some(b) } else { None }
+    }
+}
+
+impl Program {
+    /// Calls `expr` on every expression node (pre-order) and `action` on every action.
+    pub fn visit(&self, expr: &mut dyn FnMut(&Expr), action: &mut dyn FnMut(&Action)) {
+        let b = |x: &Bound, expr: &mut dyn FnMut(&Expr)| x.expr.walk(expr);
+        let acts =
+            |list: &[Action], expr: &mut dyn FnMut(&Expr), action: &mut dyn FnMut(&Action)| {
+                for a in list {
+                    action(a);
+                    match a {
+                        Action::Set { value, .. } => value.expr.walk(expr),
+                        Action::Call { args, .. } => args.iter().for_each(|x| x.expr.walk(expr)),
+                        Action::Alert { message, .. } => message.expr.walk(expr),
+                        _ => {}
+                    }
+                }
+            };
+        let windows =
+            self.windows.iter().chain(self.templates.iter().flat_map(|t| t.windows.iter()));
+        for w in windows {
+            w.rect
+                .iter()
+                .chain([&w.layer, &w.opacity, &w.visible])
+                .chain(w.source.iter())
+                .for_each(|x| b(x, expr));
+        }
+        let widgets =
+            self.widgets.iter().chain(self.templates.iter().flat_map(|t| t.widgets.iter()));
+        for w in widgets {
+            w.at.iter()
+                .chain(w.args.iter().map(|a| &a.value))
+                .chain(w.visible.iter())
+                .for_each(|x| b(x, expr));
+            for h in &w.handlers {
+                acts(&h.actions, expr, action);
+            }
+        }
+        for c in &self.components {
+            for s in &c.shapes {
+                s.args.iter().chain(s.styles.iter().map(|a| &a.value)).for_each(|x| b(x, expr));
+            }
+        }
+        for bnd in &self.bindings {
+            acts(&bnd.actions, expr, action);
+        }
+        for m in &self.menus {
+            for i in &m.items {
+                b(&i.label, expr);
+                i.enabled.iter().for_each(|x| b(x, expr));
+                acts(&i.actions, expr, action);
+            }
+        }
+        let watches =
+            self.watches.iter().chain(self.templates.iter().flat_map(|t| t.watches.iter()));
+        for w in watches {
+            b(&w.when, expr);
+            acts(&w.actions, expr, action);
+        }
+    }
+}
+
+impl Expr {
+    /// Calls `f` on this node and every node below it.
+    pub fn walk(&self, f: &mut dyn FnMut(&Expr)) {
+        f(self);
+        match &self.node {
+            Node::RangeEnd { range, .. } => range.walk(f),
+            Node::Range { lo, hi } => {
+                lo.walk(f);
+                hi.walk(f);
+            }
+            Node::Unary { arg, .. } => arg.walk(f),
+            Node::Binary { lhs, rhs, .. } => {
+                lhs.walk(f);
+                rhs.walk(f);
+            }
+            Node::If { cond, then, other } => {
+                cond.walk(f);
+                then.walk(f);
+                other.walk(f);
+            }
+            Node::Call { args, .. } => args.iter().for_each(|a| a.walk(f)),
+            Node::Format(parts) => parts.iter().for_each(|p| {
+                if let FormatPart::Value { expr, .. } = p {
+                    expr.walk(f)
+                }
+            }),
+            _ => {}
+        }
+    }
+}
