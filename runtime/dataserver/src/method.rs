@@ -353,10 +353,13 @@ impl DataServer {
         let call =
             Call { object: guid, method: name, args, responder: Responder { slot: Some(slot) } };
         let handler = method.handler.clone();
+        let stats = self.inner.pool.stats.clone();
         let run = move || {
             // A panicking handler drops its responder while unwinding: the caller sees
-            // Failed, and the OCU goes on.
-            let _ = catch_unwind(AssertUnwindSafe(|| handler(call)));
+            // Failed, and the OCU goes on. Counted like any other caught panic.
+            if catch_unwind(AssertUnwindSafe(|| handler(call))).is_err() {
+                stats.panics_caught.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            }
         };
         if options.mode == CallMode::Immediate && options.delay.is_zero() {
             run();
