@@ -185,8 +185,46 @@ pub fn split_items(text: &str) -> Vec<Chunk> {
     chunks
 }
 
+/// The end of the last code (not whitespace, not comment) in `text[start..end]`.
 fn trim_end(text: &str, start: usize, end: usize) -> usize {
-    start + text[start..end].trim_end().len()
+    let b = text.as_bytes();
+    let mut last = start;
+    let mut i = start;
+    while i < end {
+        match b[i] {
+            b' ' | b'\t' | b'\r' | b'\n' => i += 1,
+            b'/' if b.get(i + 1) == Some(&b'/') => {
+                while i < end && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if b.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i < end && !(b[i] == b'*' && b.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                i = (i + 2).min(end);
+            }
+            b'"' => {
+                i += 1;
+                while i < end && b[i] != b'"' && b[i] != b'\n' {
+                    i += if b[i] == b'\\' { 2 } else { 1 };
+                }
+                i = (i + 1).min(end);
+                last = i;
+            }
+            _ => {
+                i += 1;
+                last = i;
+            }
+        }
+    }
+    // Stay on a character boundary.
+    let mut last = last.min(end);
+    while !text.is_char_boundary(last) {
+        last += 1;
+    }
+    last
 }
 
 fn starts_keyword(rest: &[u8]) -> bool {

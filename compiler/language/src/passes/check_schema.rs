@@ -1,5 +1,5 @@
-//! Pass 5: the program against the schema. Reports paths to unknown properties, children or
-//! methods (E0401, with "did you mean"), constants outside a declared range in `set` and in
+//! Pass 5: the program against the schema. Reports calls of what is not a method (E0401;
+//! unknown members are reported by `check_types`, where each segment's span is known), constants outside a declared range in `set` and in
 //! comparisons (E0403), `set` of a read-only property (E0404), and method argument counts
 //! (E0303). Without a schema nothing is reported: paths are discovered at run time.
 //! Runs after `check_types`, on the typed program, where every path is complete.
@@ -52,9 +52,6 @@ impl Checker<'_, '_> {
 
     fn expr(&mut self, e: &Expr) {
         match &e.node {
-            Node::Path(p) => {
-                let _ = self.lookup(p, e.span);
-            }
             Node::Binary {
                 op: BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne,
                 lhs,

@@ -81,7 +81,11 @@ impl Typer<'_, '_> {
     fn module(&mut self, m: ModuleId) {
         let base = Scope { module: m, ..Scope::default() };
         let mut sink = Sink::default();
-        for item in &self.modules[m].ast.items {
+        for (i, item) in self.modules[m].ast.items.iter().enumerate() {
+            if let Item::Let(_) = item {
+                // Lowered (and so checked) even when unused; uses reuse this result.
+                self.top_let(DefId { module: m, item: i, inner: None });
+            }
             self.item(item, &base, &mut sink);
         }
         self.program.windows.append(&mut sink.windows);
@@ -268,7 +272,7 @@ impl Typer<'_, '_> {
                 _ => {
                     if let Node::Str(s) = &b.expr.node {
                         win.kind = s.clone();
-                    } else {
+                    } else if b.expr.ty.kind == TypeKind::String {
                         self.diags.error(codes::TYPE_MISMATCH, p.value.span, "a window's `type` must be a constant string such as \"video\" or \"map\"");
                     }
                 }
@@ -903,6 +907,26 @@ impl Typer<'_, '_> {
         match base.node {
             Node::Path(mut p) => {
                 p.segments.push(name);
+                let from_root = p.base == PathBase::Root;
+                // An unknown member is reported here, where the segment's own span is known
+                // (lets are inlined later, at their uses).
+                if let Lookup::Unknown { object_type, index, candidates } =
+                    self.schema.lookup(p.base_type.as_deref(), from_root, &p.segments)
+                {
+                    if index + 1 == p.segments.len() {
+                        let seg = &p.segments[index];
+                        self.diags
+                            .error(
+                                codes::UNKNOWN_PROPERTY,
+                                name_span,
+                                format!(
+                                    "an object of type \"{object_type}\" has no property `{seg}`"
+                                ),
+                            )
+                            .label(format!("`{seg}` is not in the schema"))
+                            .suggest(seg, candidates.iter().copied());
+                    }
+                }
                 let ty = self.path_type(&p);
                 mk(ty, Node::Path(p), span)
             }

@@ -339,19 +339,19 @@ impl Resolver<'_, '_> {
                 .help(format!("name one of its definitions: `{name}.something`"));
             return;
         }
+        let d = self.diags.error(codes::UNKNOWN_NAME, span, format!("unknown name `{name}`"));
+        d.label("not found in this scope");
+        if scope.limit.is_some() && self.defs.lets[scope.module].contains_key(name) {
+            d.help(format!(
+                "`{name}` is defined further down: a `let` can only use the lets above it"
+            ));
+            return;
+        }
         let mut candidates = self.defs.visible_names(self.modules, scope.module);
         candidates.extend(scope.locals.iter().map(|(n, _)| n.clone()));
-        let d = self.diags.error(codes::UNKNOWN_NAME, span, format!("unknown name `{name}`"));
-        d.label("not found in this scope").suggest(name, candidates.iter().map(String::as_str));
+        d.suggest(name, candidates.iter().map(String::as_str));
         if d.help.is_none() {
-            if let (Some(l), Some(_)) = (scope.limit, self.defs.lets[scope.module].get(name)) {
-                let _ = l;
-                d.help(format!(
-                    "`{name}` is defined further down: a `let` can only use the lets above it"
-                ));
-            } else {
-                d.help("world-model paths start at `root`, e.g. `root.vehicles.usv1.nav.speed`");
-            }
+            d.help("world-model paths start at `root`, e.g. `root.vehicles.usv1.nav.speed`");
         }
     }
 

@@ -16,9 +16,13 @@ pub fn warn_unused(modules: &Modules, used: &UsedLets, diags: &mut Diagnostics) 
                 Item::Window(_) | Item::In(_) | Item::Bind(_) | Item::Each(_) | Item::Watch(_)
             )
         });
+        let mut seen = std::collections::HashSet::new();
         for item in &module.ast.items {
             match item {
-                Item::Let(l) if !library => report(&l.name, used, diags),
+                // A duplicate is reported as E0203 already.
+                Item::Let(l) if !library && seen.insert(l.name.name.as_str()) => {
+                    report(&l.name, used, diags)
+                }
                 Item::Component(c) => {
                     for s in &c.body {
                         if let Stmt::Let(l) = s {
