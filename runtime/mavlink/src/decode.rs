@@ -1,0 +1,146 @@
+//! Splits a UDP datagram into MAVLink 1/2 frames, checks each CRC, and decodes the known
+//! ones. Malformed bytes (bad CRC, truncated frames, bad enum values) and unknown message
+//! ids are counted and skipped; nothing here can fail the caller.
+
+use mavlink::dialects::common::MavMessage;
+use mavlink::{MavHeader, MavlinkVersion, Message};
+
+/// What one datagram held.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DecodeCounts {
+    pub decoded: u64,
+    /// Bad CRC, truncated frame, garbage between frames, or a payload that does not parse.
+    pub malformed: u64,
+    /// A well-framed message whose id this dialect does not know.
+    pub unknown: u64,
+}
+
+const V1_STX: u8 = 0xFE;
+const V2_STX: u8 = 0xFD;
+const IFLAG_SIGNED: u8 = 0x01;
+const IFLAG_SYSID32: u8 = 0x02;
+
+/// Decodes every frame of `buf`, calling `each` with the decoded ones in order.
+pub fn decode_datagram(buf: &[u8], mut each: impl FnMut(MavHeader, MavMessage)) -> DecodeCounts {
+    let mut counts = DecodeCounts::default();
+    let mut i = 0;
+    let mut skipped_garbage = false;
+    while i < buf.len() {
+        let frame = match buf[i] {
+            V2_STX => parse_v2(&buf[i..]),
+            V1_STX => parse_v1(&buf[i..]),
+            _ => {
+                if !skipped_garbage {
+                    counts.malformed += 1;
+                    skipped_garbage = true;
+                }
+                i += 1;
+                continue;
+            }
+        };
+        skipped_garbage = false;
+        match frame {
+            Frame::Truncated => {
+                counts.malformed += 1;
+                break;
+            }
+            Frame::Complete { len, version, header, msgid, payload, body, crc } => {
+                let extra = MavMessage::extra_crc(msgid);
+                let known = extra != 0 || MavMessage::default_message_from_id(msgid).is_some();
+                if !known {
+                    counts.unknown += 1;
+                } else if mavlink::calculate_crc(body, extra) != crc {
+                    counts.malformed += 1;
+                } else {
+                    match MavMessage::parse(version, msgid, payload) {
+                        Ok(msg) => {
+                            counts.decoded += 1;
+                            each(header, msg);
+                        }
+                        Err(mavlink::error::ParserError::UnknownMessage { .. }) => {
+                            counts.unknown += 1
+                        }
+                        Err(_) => counts.malformed += 1,
+                    }
+                }
+                i += len;
+            }
+        }
+    }
+    counts
+}
+
+enum Frame<'a> {
+    Truncated,
+    Complete {
+        len: usize,
+        version: MavlinkVersion,
+        header: MavHeader,
+        msgid: u32,
+        payload: &'a [u8],
+        body: &'a [u8],
+        crc: u16,
+    },
+}
+
+fn parse_v2(b: &[u8]) -> Frame<'_> {
+    if b.len() < 3 {
+        return Frame::Truncated;
+    }
+    let plen = b[1] as usize;
+    let iflags = b[2];
+    let hlen = if iflags & IFLAG_SYSID32 != 0 { 12 } else { 9 };
+    let sig = if iflags & IFLAG_SIGNED != 0 { 13 } else { 0 };
+    let total = 1 + hlen + plen + 2 + sig;
+    if b.len() < total {
+        return Frame::Truncated;
+    }
+    let (system_id, component_id, id_at) = if iflags & IFLAG_SYSID32 != 0 {
+        (u32::from_le_bytes([b[5], b[6], b[7], b[8]]), b[9], 10)
+    } else {
+        (b[5] as u32, b[6], 7)
+    };
+    let msgid = u32::from_le_bytes([b[id_at], b[id_at + 1], b[id_at + 2], 0]);
+    let header = MavHeader { system_id, component_id, sequence: b[4] };
+    let body = &b[1..1 + hlen + plen];
+    let crc = u16::from_le_bytes([b[1 + hlen + plen], b[2 + hlen + plen]]);
+    Frame::Complete {
+        len: total,
+        version: MavlinkVersion::V2,
+        header,
+        msgid,
+        payload: &b[1 + hlen..1 + hlen + plen],
+        body,
+        crc,
+    }
+}
+
+fn parse_v1(b: &[u8]) -> Frame<'_> {
+    if b.len() < 2 {
+        return Frame::Truncated;
+    }
+    let plen = b[1] as usize;
+    let total = 1 + 5 + plen + 2;
+    if b.len() < total {
+        return Frame::Truncated;
+    }
+    let header = MavHeader { system_id: b[3] as u32, component_id: b[4], sequence: b[2] };
+    let body = &b[1..6 + plen];
+    let crc = u16::from_le_bytes([b[6 + plen], b[7 + plen]]);
+    Frame::Complete {
+        len: total,
+        version: MavlinkVersion::V1,
+        header,
+        msgid: b[5] as u32,
+        payload: &b[6..6 + plen],
+        body,
+        crc,
+    }
+}
+
+/// Encodes one message as a MAVLink 2 frame.
+pub fn encode_v2(header: MavHeader, msg: &MavMessage) -> Vec<u8> {
+    let mut out = Vec::with_capacity(64);
+    let _ = mavlink::write_v2_msg(&mut out, header, msg);
+    out
+}

@@ -1,0 +1,193 @@
+//! The MAVLink module against a real peer written by others: a vehicle played by pymavlink
+//! (tests/peers/mav_vehicle.py) on loopback. CI installs pymavlink; without python3 and
+//! pymavlink this test fails and says so.
+
+use mocu_dataserver::{CallOutcome, DataServer, Guid, Value};
+use mocu_host::{ModuleHost, ModuleSpec, Registry};
+use std::io::{BufRead, BufReader, Write};
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+struct Peer {
+    child: Child,
+    lines: Arc<Mutex<Vec<String>>>,
+}
+
+impl Peer {
+    fn start(port: u16, sysid: u8) -> Peer {
+        let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/peers/mav_vehicle.py");
+        let check = Command::new("python3").args(["-c", "import pymavlink"]).output();
+        match check {
+            Ok(o) if o.status.success() => {}
+            _ => panic!(
+                "this test needs python3 with pymavlink: `python3 -m pip install pymavlink==2.4.50` \
+                 (CI installs it in .ci/run)"
+            ),
+        }
+        let mut child = Command::new("python3")
+            .arg(script)
+            .args(["--port", &port.to_string(), "--sysid", &sysid.to_string()])
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("starting the pymavlink vehicle");
+        let lines = Arc::new(Mutex::new(Vec::new()));
+        let out = child.stdout.take().expect("piped stdout");
+        let l = lines.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(out).lines().map_while(Result::ok) {
+                l.lock().unwrap().push(line);
+            }
+        });
+        Peer { child, lines }
+    }
+
+    fn tell(&mut self, line: &str) {
+        let stdin = self.child.stdin.as_mut().expect("piped stdin");
+        writeln!(stdin, "{line}").expect("writing to the peer");
+        stdin.flush().unwrap();
+    }
+
+    fn said(&self, prefix: &str) -> Vec<String> {
+        self.lines.lock().unwrap().iter().filter(|l| l.starts_with(prefix)).cloned().collect()
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+fn wait_for<T>(what: &str, secs: f64, mut f: impl FnMut() -> Option<T>) -> T {
+    let deadline = Instant::now() + Duration::from_secs_f64(secs);
+    loop {
+        if let Some(v) = f() {
+            return v;
+        }
+        assert!(Instant::now() < deadline, "timed out after {secs} s waiting for {what}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn num(ds: &DataServer, g: Guid, p: &str) -> Option<f64> {
+    ds.try_get(g, p.into()).and_then(|v| v.as_f64())
+}
+
+fn call(ds: &DataServer, g: Guid, m: &str, args: Vec<Value>) -> CallOutcome {
+    ds.call_wait(g, m, args, None)
+}
+
+#[test]
+fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
+    let ds = DataServer::default();
+    let mut reg = Registry::new();
+    mocu_mavlink::register(&mut reg);
+    let mut host = ModuleHost::new(ds.clone(), reg);
+    let spec = ModuleSpec::new("mavlink")
+        .with("address", "127.0.0.1:0")
+        .with("command_timeout_ms", 500)
+        .with("link_timeout_ms", 3000);
+    host.start(&spec).expect("the MAVLink module starts");
+    let status = ds.resolve(&["modules", "mavlink"]).unwrap();
+    let addr = ds.get(status, "address").unwrap();
+    let port: u16 = addr.as_str().unwrap().rsplit(':').next().unwrap().parse().unwrap();
+    let mut peer = Peer::start(port, 7);
+
+    // Discovery by HEARTBEAT.
+    let v = wait_for("mav7 to be discovered", 15.0, || ds.resolve(&["vehicles", "mav7"]));
+    let info = ds.info(v).unwrap();
+    assert_eq!((&*info.kind, &*info.subtype), ("uav", "quadrotor"));
+    let nav = ds.resolve(&["vehicles", "mav7", "nav"]).unwrap();
+
+    // Telemetry with units.
+    wait_for("telemetry", 5.0, || {
+        (num(&ds, nav, "satellites")? == 11.0 && num(&ds, v, "battery_v")? > 0.0).then_some(())
+    });
+    assert!((num(&ds, nav, "lat").unwrap() - 32.7157).abs() < 1e-6);
+    assert!((num(&ds, nav, "lon").unwrap() + 117.1611).abs() < 1e-6);
+    assert!((num(&ds, nav, "alt").unwrap() - 12.345).abs() < 1e-9);
+    assert!((num(&ds, nav, "speed").unwrap() - 5.0).abs() < 1e-9);
+    assert!((num(&ds, nav, "heading").unwrap() - 90.0).abs() < 1e-9);
+    assert!((num(&ds, nav, "roll").unwrap() - 0.1f32.to_degrees() as f64).abs() < 1e-3);
+    assert!((num(&ds, nav, "throttle").unwrap() - 42.0).abs() < 1e-9);
+    assert!((num(&ds, v, "battery_v").unwrap() - 12.6).abs() < 1e-9);
+    assert!((num(&ds, v, "fuel").unwrap() - 0.87).abs() < 1e-9);
+    assert_eq!(ds.get(nav, "gps_fix").unwrap(), Value::str("3D_FIX"));
+    assert_eq!(ds.meta(nav, "speed").unwrap().units.as_deref(), Some("m/s"));
+    assert_eq!(ds.meta(nav, "alt").unwrap().units.as_deref(), Some("m"));
+    assert_eq!(ds.get(v, "mode").unwrap(), Value::str("STABILIZE"));
+    assert_eq!(ds.get(v, "armed").unwrap(), Value::Bool(false));
+
+    // Arm: accepted, and the next heartbeat shows it.
+    assert_eq!(call(&ds, v, "arm", vec![Value::Bool(true)]), CallOutcome::Accepted(vec![]));
+    wait_for("armed in the heartbeat", 3.0, || {
+        (ds.get(v, "armed").ok()? == Value::Bool(true)).then_some(())
+    });
+    // Set mode by name.
+    assert!(call(&ds, v, "set_mode", vec![Value::str("guided")]).is_accepted());
+    wait_for("GUIDED in the heartbeat", 3.0, || {
+        (ds.get(v, "mode").ok()? == Value::str("GUIDED")).then_some(())
+    });
+    match call(&ds, v, "set_mode", vec![Value::str("WARP")]) {
+        CallOutcome::Refused(why) => assert!(why.contains("unknown mode `WARP`"), "{why}"),
+        other => panic!("expected a refusal, got {other:?}"),
+    }
+    // Go to a position (COMMAND_INT) and return home.
+    let goto = vec![Value::Float(32.72), Value::Float(-117.16), Value::Float(30.0)];
+    assert!(call(&ds, v, "goto", goto).is_accepted());
+    assert!(call(&ds, v, "return_home", vec![]).is_accepted());
+    // A refused command shows the vehicle's reason.
+    assert_eq!(call(&ds, v, "land", vec![]), CallOutcome::Refused("MAV_RESULT_DENIED".into()));
+
+    // Mission upload: a route of three waypoints.
+    let routes = ds.resolve(&["vehicles", "mav7", "routes"]).unwrap();
+    let route = match call(&ds, routes, "create_route", vec![Value::str("survey")]) {
+        CallOutcome::Accepted(r) => r[0].as_guid().unwrap(),
+        other => panic!("create_route: {other:?}"),
+    };
+    match call(&ds, v, "upload_route", vec![Value::Guid(route)]) {
+        CallOutcome::Refused(why) => assert!(why.contains("no waypoints"), "{why}"),
+        other => panic!("uploading an empty route: {other:?}"),
+    }
+    for (i, (lat, lon)) in
+        [(32.716, -117.161), (32.717, -117.162), (32.718, -117.160)].iter().enumerate()
+    {
+        let args = vec![Value::Int(i as i64), Value::Float(*lat), Value::Float(*lon)];
+        assert!(call(&ds, route, "insert_waypoint", args).is_accepted());
+    }
+    assert_eq!(
+        call(&ds, v, "upload_route", vec![Value::Guid(route)]),
+        CallOutcome::Accepted(vec![Value::Int(3)])
+    );
+    let items = peer.said("mission_item");
+    assert_eq!(items.len(), 3, "{items:?}");
+    assert!(items[1].starts_with("mission_item 1 32.717"), "{items:?}");
+
+    // Malformed and unknown packets were counted, not fatal.
+    wait_for("counters", 3.0, || {
+        (num(&ds, status, "malformed")? >= 1.0 && num(&ds, status, "unknown")? >= 1.0).then_some(())
+    });
+
+    // Link loss after 3 s without a heartbeat, recovery when they return.
+    peer.tell("silence 5");
+    let t = Instant::now();
+    wait_for("link lost", 6.0, || {
+        (ds.get(v, "link_lost").ok()? == Value::Bool(true)).then_some(())
+    });
+    assert!(t.elapsed() >= Duration::from_millis(1900), "lost too early: {:?}", t.elapsed());
+    assert_eq!(ds.get(v, "stale").unwrap(), Value::Bool(true));
+    match call(&ds, v, "arm", vec![Value::Bool(false)]) {
+        CallOutcome::Failed(why) => assert!(why.contains("link lost"), "{why}"),
+        other => panic!("a command while the link is lost: {other:?}"),
+    }
+    wait_for("link recovered", 8.0, || {
+        (ds.get(v, "link_lost").ok()? == Value::Bool(false)).then_some(())
+    });
+    assert_eq!(ds.get(v, "stale").unwrap(), Value::Bool(false));
+    peer.tell("quit");
+    host.stop_all();
+}
