@@ -13,30 +13,34 @@ use std::time::{Duration, Instant};
 
 pub(crate) type Job = Box<dyn FnOnce() + Send + 'static>;
 
-/// Counts jobs submitted and not yet finished, so tests can wait for quiet.
+/// Counts jobs submitted and not yet finished, so tests can wait for quiet. The count is an
+/// atomic so that submitting and finishing a job (every notification) take no lock; the
+/// mutex is taken only to reach zero and to wait for it.
 #[derive(Default)]
 pub(crate) struct Inflight {
-    count: Mutex<usize>,
+    count: AtomicUsize,
+    lock: Mutex<()>,
     zero: Condvar,
 }
 
 impl Inflight {
     fn add(&self) {
-        *self.count.lock() += 1;
+        self.count.fetch_add(1, Ordering::AcqRel);
     }
 
     fn done(&self) {
-        let mut c = self.count.lock();
-        *c -= 1;
-        if *c == 0 {
+        if self.count.fetch_sub(1, Ordering::AcqRel) == 1 {
+            // Taking the lock orders this wake-up after a waiter's check (a waiter holds the
+            // lock from its check until it sleeps), so no wake-up is lost.
+            let _g = self.lock.lock();
             self.zero.notify_all();
         }
     }
 
     fn wait_zero(&self) {
-        let mut c = self.count.lock();
-        while *c != 0 {
-            self.zero.wait(&mut c);
+        let mut g = self.lock.lock();
+        while self.count.load(Ordering::Acquire) != 0 {
+            self.zero.wait(&mut g);
         }
     }
 }

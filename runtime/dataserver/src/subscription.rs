@@ -117,12 +117,31 @@ impl Pending {
             && self.items[(seq - self.head) as usize].as_ref().is_some_and(|n| n.kind == Kind::New)
     }
 
-    fn take_all(&mut self) -> Vec<Notification> {
+    /// Takes everything pending, in order (coalesced-away slots are `None`), leaving the
+    /// queue empty. The buffer moves out instead of being copied into a new one (and comes
+    /// back through `recycle`), so a delivery allocates nothing; a coalescing index grown
+    /// by a burst is dropped, so an idle subscription does not keep a burst's memory.
+    fn take_all(&mut self) -> VecDeque<Option<Notification>> {
         self.head += self.items.len() as u64;
-        self.index.clear();
-        self.items.drain(..).flatten().collect()
+        if self.index.capacity() > KEEP {
+            self.index = Default::default();
+        } else {
+            self.index.clear();
+        }
+        std::mem::take(&mut self.items)
+    }
+
+    /// Gives a delivered batch's buffer back for the next batch, if it is small and no new
+    /// batch has started meanwhile; otherwise it is freed.
+    fn recycle(&mut self, batch: VecDeque<Option<Notification>>) {
+        if self.items.capacity() == 0 && batch.is_empty() && batch.capacity() <= KEEP {
+            self.items = batch;
+        }
     }
 }
+
+/// Queue capacity an idle subscription keeps for reuse (beyond it, memory goes back).
+const KEEP: usize = 8;
 
 impl Sub {
     pub(crate) fn new(
@@ -172,7 +191,7 @@ impl Sub {
 
     /// Delivers what is pending, one batch, on the subscription's executor.
     fn deliver(self: Arc<Self>) {
-        let batch = {
+        let mut batch = {
             let mut q = self.queue.lock();
             if !self.is_active() {
                 q.take_all();
@@ -185,7 +204,7 @@ impl Sub {
         };
         {
             let mut cb = self.callback.lock();
-            for n in &batch {
+            for n in batch.iter().flatten() {
                 if !self.is_active() {
                     break;
                 }
@@ -203,6 +222,8 @@ impl Sub {
                 }
             }
         }
+        // Values are dropped outside the lock.
+        batch.clear();
         let mut q = self.queue.lock();
         q.running_on = None;
         if self.is_active() && !q.items.is_empty() {
@@ -211,6 +232,7 @@ impl Sub {
             self.target.submit(Box::new(move || me.deliver()));
         } else {
             q.take_all();
+            q.recycle(batch);
             q.scheduled = false;
             self.idle.notify_all();
         }
