@@ -84,27 +84,69 @@ struct State {
     closed: bool,
     executor: Executor,
     callback: Arc<Mutex<PathCallback>>,
+    /// Watching the object at the end of the path, not a property of it.
+    object_only: bool,
 }
 
 impl DataServer {
-    /// Watches a dotted path. The callback runs on `executor` (a new serial executor when
-    /// `None`), in order.
+    /// Watches a dotted path from the root. The callback runs on `executor` (a new serial
+    /// executor when `None`), in order.
     pub fn watch_path(
         &self,
         path: DottedPath,
         executor: Option<&Executor>,
         callback: impl FnMut(&PathEvent) + Send + 'static,
     ) -> Result<PathWatch, DsError> {
+        self.watch_path_from(Guid::ROOT, path, executor, callback)
+    }
+
+    /// Watches a dotted path that starts at `start` instead of the root (a template
+    /// instance's vehicle, a menu's `self`).
+    pub fn watch_path_from(
+        &self,
+        start: Guid,
+        path: DottedPath,
+        executor: Option<&Executor>,
+        callback: impl FnMut(&PathEvent) + Send + 'static,
+    ) -> Result<PathWatch, DsError> {
+        self.start_watch(start, path, false, executor, Box::new(callback))
+    }
+
+    /// Watches the object reached by `objects` (names from `start`): `New` when it becomes
+    /// reachable (with its GUID in `object`), `Deleted` when it stops being reachable.
+    pub fn watch_object(
+        &self,
+        start: Guid,
+        objects: &[&str],
+        executor: Option<&Executor>,
+        callback: impl FnMut(&PathEvent) + Send + 'static,
+    ) -> Result<PathWatch, DsError> {
+        let path = DottedPath::new(objects, "");
+        self.start_watch(start, path, true, executor, Box::new(callback))
+    }
+
+    fn start_watch(
+        &self,
+        start: Guid,
+        path: DottedPath,
+        object_only: bool,
+        executor: Option<&Executor>,
+        callback: PathCallback,
+    ) -> Result<PathWatch, DsError> {
+        if !self.exists(start) {
+            return Err(DsError::NoSuchObject { object: self.obj_ref(start) });
+        }
         let executor = executor.cloned().unwrap_or_else(|| self.serial_executor());
         let state = Arc::new(Mutex::new(State {
             path,
-            bound: vec![Guid::ROOT],
+            bound: vec![start],
             subs: Vec::new(),
             generation: 0,
             reported: None,
             closed: false,
             executor,
-            callback: Arc::new(Mutex::new(Box::new(callback))),
+            callback: Arc::new(Mutex::new(callback)),
+            object_only,
         }));
         let events = {
             let mut st = state.lock();
@@ -152,6 +194,13 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
         st.generation += 1;
         let generation = st.generation;
         let at_end = j == st.path.objects.len();
+        if at_end && st.object_only {
+            if st.reported.as_ref().map(|r| r.0) != Some(at) {
+                st.reported = Some((at, Value::Bool(true)));
+                events.push(PathEvent { kind: Kind::New, object: at, value: None });
+            }
+            break;
+        }
         let topic = if at_end {
             Topic::Properties { object: at, names: Some(vec![st.path.property]) }
         } else {

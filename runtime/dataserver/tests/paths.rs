@@ -123,3 +123,40 @@ fn cancelling_a_watch_removes_every_subscription_it_made() {
     }
     assert_eq!(ds.subscription_count(), 0);
 }
+
+#[test]
+fn a_path_can_start_at_any_object() {
+    let ds = DataServer::default();
+    let v = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+    let u = ds.create_object(v, ObjectInfo::new("usv1", "usv")).unwrap();
+    let nav = ds.create_object(u, ObjectInfo::new("nav", "nav")).unwrap();
+    ds.set(nav, "speed", Value::Float(3.0)).unwrap();
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let l = log.clone();
+    let _w = ds
+        .watch_path_from(u, DottedPath::parse("nav.speed").unwrap(), None, move |e: &PathEvent| {
+            l.lock().unwrap().push((e.kind, e.value.clone()))
+        })
+        .unwrap();
+    assert_eq!(take(&ds, &log), [(Kind::New, Some(Value::Float(3.0)))]);
+}
+
+#[test]
+fn an_object_watch_reports_the_object_as_it_comes_and_goes() {
+    let ds = DataServer::default();
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let l = log.clone();
+    let _w = ds
+        .watch_object(Guid::ROOT, &["vehicles", "usv1"], None, move |e: &PathEvent| {
+            l.lock().unwrap().push((e.kind, e.object))
+        })
+        .unwrap();
+    let v = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+    let u = ds.create_object(v, ObjectInfo::new("usv1", "usv")).unwrap();
+    ds.quiesce();
+    ds.delete_object(u).unwrap();
+    ds.quiesce();
+    let u2 = ds.create_object(v, ObjectInfo::new("usv1", "usv")).unwrap();
+    ds.quiesce();
+    assert_eq!(*log.lock().unwrap(), [(Kind::New, u), (Kind::Deleted, u), (Kind::New, u2)]);
+}
