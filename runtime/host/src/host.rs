@@ -8,6 +8,9 @@ use std::collections::BTreeMap;
 use std::fmt;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+/// The receiving end of the host's reports.
+pub type Events = Receiver<HostEvent>;
+
 /// A module: started once with its context, stopped once. `start` should return quickly:
 /// periodic work goes to `ctx.ds.run_after` on `ctx.executor`, blocking I/O to
 /// `ctx.spawn_thread`.
@@ -98,7 +101,7 @@ impl ModuleHost {
     }
 
     /// The host's and the modules' reports, in order. Every clone sees each event once.
-    pub fn events(&self) -> Receiver<HostEvent> {
+    pub fn events(&self) -> Events {
         self.rx.clone()
     }
 

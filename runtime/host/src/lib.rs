@@ -19,5 +19,5 @@ mod spec;
 pub mod world;
 
 pub use context::{HostEvent, Level, ModuleContext};
-pub use host::{Factory, Module, ModuleHost, Registry, StartError};
+pub use host::{Events, Factory, Module, ModuleHost, Registry, StartError};
 pub use spec::{ModuleSpec, SpecError};

@@ -32,6 +32,9 @@ pub struct SimConfig {
     pub camera_height: u32,
     /// Latitude and longitude of the local origin (x = y = 0).
     pub origin: (f64, f64),
+    /// Live data with nobody at the controls: the first vehicle of each type arms, starts
+    /// and patrols its route on appearing; the others wait for the operator.
+    pub autostart: bool,
 }
 
 impl Default for SimConfig {
@@ -41,12 +44,13 @@ impl Default for SimConfig {
             usv: 2,
             ugv: 1,
             uav: 1,
-            appear_every: 1.0,
+            appear_every: 0.5,
             rate_hz: 20.0,
             camera_fps: 10.0,
             camera_width: 64,
             camera_height: 48,
             origin: (32.7100, -117.2400),
+            autostart: true,
         }
     }
 }
@@ -73,6 +77,7 @@ impl SimConfig {
                 e(spec.f64_or("origin_lat", d.origin.0))?,
                 e(spec.f64_or("origin_lon", d.origin.1))?,
             ),
+            autostart: spec.bool_or("autostart", d.autostart).map_err(|e| e.to_string())?,
         };
         if !(cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0) {
             return Err(format!("module `{}`: `rate_hz` must be in (0, 1000]", spec.name));
@@ -313,8 +318,17 @@ impl Sim {
         let routes = world::publish_routes(ds, ex, guid, frame.clone())?;
         let r = 60.0;
         let square = [(x + r, y), (x + r, y + r), (x, y + r), (x, y)];
-        world::create_route(ds, ex, routes, "patrol", frame, &square)?;
+        let patrol = world::create_route(ds, ex, routes, "patrol", frame, &square)?;
         self.publish_methods(guid)?;
+        let mut v = v;
+        if w.cfg.autostart && name.ends_with('1') && !name.ends_with("11") {
+            v.armed = true;
+            v.engine = true;
+            v.guidance =
+                Guidance::Route { route: patrol, points: square.to_vec(), next: 0, repeat: true };
+            let _ = ds.set(guid, "route", Value::Guid(patrol));
+            publish(ds, &v, w.cfg.origin);
+        }
         Ok(v)
     }
 
@@ -448,7 +462,7 @@ impl Sim {
             if points.is_empty() {
                 return CallOutcome::Refused(format!("route `{}` has no waypoints", info.name));
             }
-            v.guidance = Guidance::Route { route, points, next: 0 };
+            v.guidance = Guidance::Route { route, points, next: 0, repeat: false };
             let _ = ds.set(v.guid, "route", Value::Guid(route));
             CallOutcome::Accepted(vec![])
         })?;

@@ -72,7 +72,8 @@ pub(crate) enum Guidance {
     /// To a point (goto, or home for return_home); holds there.
     Point { x: f64, y: f64, home: bool },
     /// Along a route's waypoints (local metres), index of the next one.
-    Route { route: Guid, points: Vec<(f64, f64)>, next: usize },
+    /// `repeat`: start over after the last waypoint (a patrol).
+    Route { route: Guid, points: Vec<(f64, f64)>, next: usize, repeat: bool },
     /// Stay put.
     Hold,
 }
@@ -145,10 +146,14 @@ impl Vehicle {
         {
             throttle = 0.0;
         }
-        if let Guidance::Route { next, ref points, .. } = self.guidance
-            && next >= points.len()
+        if let Guidance::Route { ref mut next, ref points, repeat, .. } = self.guidance
+            && *next >= points.len()
         {
-            self.guidance = Guidance::Hold;
+            if repeat {
+                *next = 0;
+            } else {
+                self.guidance = Guidance::Hold;
+            }
         }
         let running = self.engine && self.armed && self.fuel > 0.0;
         if !running {
