@@ -82,7 +82,9 @@ pub fn main(args: CheckArgs) -> ExitCode {
         Format::Sarif => render::sarif(&sources, &list),
     };
     if !out.is_empty() {
-        println!("{}", out.trim_end());
+        use std::io::Write;
+        // A closed pipe (`mocu check … | head`) is not an error of the check.
+        let _ = writeln!(std::io::stdout().lock(), "{}", out.trim_end());
     }
     if io_error {
         ExitCode::from(2)

@@ -48,10 +48,18 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
                 let src = &text[chunk.start..chunk.end];
                 match Grammar::parse(Rule::item_only, src) {
                     Ok(mut pairs) => {
-                        let ctx = Ctx { file, offset: chunk.start };
+                        let ctx = Ctx { file, offset: chunk.start, depth: 0.into(), too_deep: None.into() };
                         let Some(top) = pairs.next() else { continue };
                         if let Some(item) = top.into_inner().find(|p| p.as_rule() != Rule::EOI) {
-                            items.push(ctx.item(item));
+                            let item = ctx.item(item);
+                            match ctx.too_deep.get() {
+                                None => items.push(item),
+                                Some(span) => {
+                                    diags
+                                        .error(codes::SYNTAX, span, "this expression is nested too deeply")
+                                        .help(format!("split it with `let`s: at most {MAX_DEPTH} levels and {MAX_OPERATORS} operators in a row"));
+                                }
+                            }
                         }
                     }
                     Err(e) => report_pest_error(file, chunk.start, src, &e, diags),
@@ -383,7 +391,15 @@ fn pratt() -> &'static PrattParser<Rule> {
 struct Ctx {
     file: FileId,
     offset: usize,
+    /// Current expression nesting, and where it first went past [`MAX_DEPTH`].
+    depth: std::cell::Cell<usize>,
+    too_deep: std::cell::Cell<Option<Span>>,
 }
+
+/// Expressions nested deeper than this, or with more operators than [`MAX_OPERATORS`] in a row,
+/// are refused (E0101) instead of risking the stack in the later, recursive passes.
+const MAX_DEPTH: usize = 64;
+const MAX_OPERATORS: usize = 256;
 
 impl Ctx {
     fn span(&self, p: &Pair<Rule>) -> Span {
@@ -705,7 +721,19 @@ impl Ctx {
     }
 
     pub fn expr(&self, p: Pair<Rule>) -> Expr {
-        self.expr_pairs(p.into_inner())
+        let span = self.span(&p);
+        let inner = p.into_inner();
+        let depth = self.depth.get();
+        if depth >= MAX_DEPTH || inner.len() > 2 * MAX_OPERATORS {
+            if self.too_deep.get().is_none() {
+                self.too_deep.set(Some(span));
+            }
+            return Expr { kind: ExprKind::Bool(false), span };
+        }
+        self.depth.set(depth + 1);
+        let e = self.expr_pairs(inner);
+        self.depth.set(depth);
+        e
     }
 
     fn expr_pairs(&self, pairs: Pairs<Rule>) -> Expr {

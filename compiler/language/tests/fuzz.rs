@@ -1,0 +1,70 @@
+//! No input makes the checker panic: random bytes, and soups of the language's own tokens
+//! (which reach far deeper into the passes than random bytes do). Bounded for CI:
+//! `PROPTEST_CASES` raises the count for a longer local run.
+
+use mocu_language::{Diagnostics, MemoryLoader, SourceMap, check_path, render};
+use proptest::prelude::*;
+
+const TOKENS: &[&str] = &[
+    "use", "let", "window", "in", "component", "bind", "menu", "watch", "for", "each", "of", "type", "if", "then", "else", "when", "item",
+    "enabled", "on", "at", "rect", "layer", "opacity", "visible", "source", "set", "call", "swap", "show", "hide", "alert", "warning",
+    "true", "false", "self", "root", "and", "or", "not", "axis", "button", "key", "gamepad", "keyboard", "mouse", "left_y", "south",
+    "circle", "text", "line", "polyline", "arc", "fill", "stroke", "size", "Dial", "Bar", "Button", "Video", "x", "y", "w", "h", "v",
+    "usv", "nav", "speed", "value", "range", "index", "min", "max", "clamp", "deadzone", "format", "present", "{", "}", "(", ")", "[",
+    "]", ",", ":", ".", "..", "=", "==", "!=", "<", "<=", ">", ">=", "+", "-", "*", "/", "!", "&&", "||", "??", "->", "?", "0", "1.5",
+    "300ms", "5s", "100%", "10px", "45deg", "#ff0000", "#00ff0080", "\"s\"", "\"{x:.1}\"", "\"{\"", "\"a{b}c{d:03.0}\"", "\"",
+    "//c\n", "/*", "*/", "\n", " ", "\t", "é", "°", "\"use\"", "stdlib/gauges.mocu", "\"stdlib/gauges.mocu\"", "\"lib.mocu\"",
+];
+
+fn check(text: &str) {
+    let loader = MemoryLoader::new()
+        .with("lib.mocu", "use \"main.mocu\"\ncomponent Dial(value: number?, range: range = 0 .. 1) { circle 0 0 w }\nlet x = 1")
+        .with("stdlib/gauges.mocu", "component Bar(value: number?) { rect 0 0 w h }");
+    let mut sources = SourceMap::new();
+    let mut diags = Diagnostics::new();
+    check_path("main.mocu", text.to_string(), &loader, &mut sources, &mut diags);
+    diags.sort();
+    let list = diags.into_vec();
+    // Rendering walks every span: it must not panic either.
+    let _ = render::human(&sources, &list);
+    let _ = render::json(&sources, &list);
+    let _ = render::sarif(&sources, &list);
+    for d in &list {
+        assert!(d.span.start <= d.span.end, "a span runs backwards: {d:?}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn checker_never_panics_on_random_bytes(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+        check(&String::from_utf8_lossy(&bytes));
+    }
+
+    #[test]
+    fn checker_never_panics_on_token_soup(tokens in proptest::collection::vec(proptest::sample::select(TOKENS), 0..120)) {
+        check(&tokens.join(" "));
+    }
+
+    #[test]
+    fn checker_never_panics_on_a_mutated_layout(cut in 0usize..2000, insert in proptest::sample::select(TOKENS)) {
+        let base = include_str!("../../../layouts/usv.mocu");
+        let mut at = cut.min(base.len());
+        while !base.is_char_boundary(at) { at -= 1; }
+        check(&format!("{}{}{}", &base[..at], insert, &base[at..]));
+    }
+}
+
+#[test]
+fn checker_refuses_deep_nesting_without_overflowing_the_stack() {
+    for text in [
+        format!("let x = {}1{}", "(".repeat(3000), ")".repeat(3000)),
+        format!("let x = {}1", "-".repeat(5000)),
+        format!("let x = {}1", "1 + ".repeat(20000)),
+        format!("let x = {}1{}", "f(".repeat(2000), ")".repeat(2000)),
+        format!("let x = \"{}\"", "{\"{".repeat(500)),
+    ] {
+        check(&text);
+    }
+}
