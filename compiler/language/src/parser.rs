@@ -48,7 +48,12 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
                 let src = &text[chunk.start..chunk.end];
                 match Grammar::parse(Rule::item_only, src) {
                     Ok(mut pairs) => {
-                        let ctx = Ctx { file, offset: chunk.start, depth: 0.into(), too_deep: None.into() };
+                        let ctx = Ctx {
+                            file,
+                            offset: chunk.start,
+                            depth: 0.into(),
+                            too_deep: None.into(),
+                        };
                         let Some(top) = pairs.next() else { continue };
                         if let Some(item) = top.into_inner().find(|p| p.as_rule() != Rule::EOI) {
                             let item = ctx.item(item);

@@ -9,7 +9,8 @@ fn built() -> mocu_language::Bundle {
     let mut sources = SourceMap::new();
     let mut diags = Diagnostics::new();
     let text = loader.files["p/project.toml"].clone();
-    let b = check_path("p/project.toml", text, &loader, &mut sources, &mut diags).expect("a profile gives a bundle");
+    let b = check_path("p/project.toml", text, &loader, &mut sources, &mut diags)
+        .expect("a profile gives a bundle");
     assert!(diags.is_empty(), "{:?}", diags.into_vec());
     b
 }
@@ -42,7 +43,10 @@ fn a_bundle_from_another_version_is_refused() {
     let other = text.replacen(&format!("mocu {}", bundle::VERSION), "mocu 0.0.1", 1);
     let e = bundle::read(other.as_bytes()).expect_err("other version");
     assert!(matches!(e, bundle::BundleError::Version { .. }));
-    assert!(e.to_string().contains("built by mocu 0.0.1") && e.to_string().contains("rebuild"), "{e}");
+    assert!(
+        e.to_string().contains("built by mocu 0.0.1") && e.to_string().contains("rebuild"),
+        "{e}"
+    );
     let v2 = text.replacen("v1", "v2", 1);
     assert!(matches!(bundle::read(v2.as_bytes()), Err(bundle::BundleError::Version { .. })));
     assert_eq!(bundle::read(b"window w {}"), Err(bundle::BundleError::NotABundle));
