@@ -1,1 +1,130 @@
-fn main() {}
+//! MAVLink ingest: messages decoded *and published* into the DataServer per second, against
+//! the `mavlink` crate's decoding alone, on the same datagrams in the same run.
+
+use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
+use mavlink::MavHeader;
+use mavlink::dialects::common::*;
+use mocu_dataserver::DataServer;
+use mocu_host::ModuleContext;
+use mocu_mavlink::{Link, LinkConfig, decode_datagram, encode_v2};
+
+/// A telemetry mix as a vehicle sends it: per second 1 HEARTBEAT + 1 SYS_STATUS and
+/// 10 each of GLOBAL_POSITION_INT, ATTITUDE, VFR_HUD, GPS_RAW_INT; one datagram each.
+fn datagrams(vehicles: u8) -> Vec<Vec<u8>> {
+    let mut out = Vec::new();
+    let mut seq = 0u8;
+    for tick in 0..10u32 {
+        for sys in 1..=vehicles {
+            let mut push = |m: MavMessage| {
+                seq = seq.wrapping_add(1);
+                let h = MavHeader { system_id: u32::from(sys), component_id: 1, sequence: seq };
+                out.push(encode_v2(h, &m));
+            };
+            if tick == 0 {
+                push(MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                    custom_mode: 4,
+                    mavtype: MavType::MAV_TYPE_QUADROTOR,
+                    autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+                    base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                    system_status: MavState::MAV_STATE_ACTIVE,
+                    mavlink_version: 3,
+                }));
+                let mut s = SYS_STATUS_DATA::default();
+                s.voltage_battery = 12600;
+                s.battery_remaining = 80;
+                push(MavMessage::SYS_STATUS(s));
+            }
+            let t = tick as i32;
+            push(MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
+                time_boot_ms: tick * 100,
+                lat: 327_157_000 + t * 10,
+                lon: -1_171_611_000 + t * 10,
+                alt: 100_000,
+                relative_alt: 10_000 + t,
+                vx: 300,
+                vy: 400,
+                vz: 0,
+                hdg: 9000 + tick as u16,
+            }));
+            push(MavMessage::ATTITUDE(ATTITUDE_DATA {
+                time_boot_ms: tick * 100,
+                roll: 0.01 * t as f32,
+                pitch: 0.02,
+                yaw: 1.5,
+                rollspeed: 0.0,
+                pitchspeed: 0.0,
+                yawspeed: 0.0,
+            }));
+            push(MavMessage::VFR_HUD(VFR_HUD_DATA {
+                airspeed: 5.0 + t as f32,
+                groundspeed: 5.0,
+                alt: 100.0,
+                climb: 0.1,
+                heading: 90,
+                throttle: 40,
+            }));
+            let mut g = GPS_RAW_INT_DATA::default();
+            g.fix_type = GpsFixType::GPS_FIX_TYPE_3D_FIX;
+            g.satellites_visible = 10 + (tick % 3) as u8;
+            push(MavMessage::GPS_RAW_INT(g));
+        }
+    }
+    out
+}
+
+fn bench(c: &mut Criterion) {
+    let grams = datagrams(4);
+    let n = grams.len() as u64;
+    let mut group = c.benchmark_group("mavlink");
+    group.throughput(Throughput::Elements(n));
+
+    group.bench_function("crate_decode_only", |b| {
+        b.iter(|| {
+            let mut k = 0;
+            for d in &grams {
+                let mut r = mavlink::MavlinkReader::new(&d[..]);
+                if r.read_any_message::<MavMessage>().is_ok() {
+                    k += 1;
+                }
+            }
+            assert_eq!(k, n);
+        })
+    });
+
+    group.bench_function("mocu_decode_only", |b| {
+        b.iter(|| {
+            let mut k = 0u64;
+            for d in &grams {
+                k += decode_datagram(d, |_, m| {
+                    std::hint::black_box(m);
+                })
+                .decoded;
+            }
+            assert_eq!(k, n);
+        })
+    });
+
+    let ds = DataServer::default();
+    let link =
+        Link::new(ModuleContext::detached("mavlink", ds.clone()), LinkConfig::default(), None)
+            .unwrap();
+    for d in &grams {
+        link.ingest(d, None); // discovery happens once, outside the measurement
+    }
+    group.bench_function("mocu_decode_and_publish", |b| {
+        b.iter_batched(
+            || (),
+            |_| {
+                for d in &grams {
+                    link.ingest(d, None);
+                }
+            },
+            BatchSize::SmallInput,
+        )
+    });
+    group.finish();
+    ds.quiesce();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

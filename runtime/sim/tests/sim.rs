@@ -1,0 +1,245 @@
+//! The simulator, stepped explicitly (no wall clock): determinism, discovery, kinematics,
+//! refusals with reasons, route editing, camera frames.
+
+use mocu_dataserver::{
+    Call, CallOutcome, DataServer, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Value,
+    ValueKind,
+};
+use mocu_host::ModuleContext;
+use mocu_host::world::route_waypoints;
+use mocu_sim::{Sim, SimConfig};
+use std::sync::{Arc, Mutex};
+
+fn sim(cfg: SimConfig) -> (DataServer, Sim) {
+    let ds = DataServer::default();
+    let ctx = ModuleContext::detached("sim", ds.clone());
+    let sim = Sim::new(ctx, cfg).unwrap();
+    (ds, sim)
+}
+
+fn quiet() -> SimConfig {
+    SimConfig { autostart: false, appear_every: 0.0, ..SimConfig::default() }
+}
+
+fn run(sim: &Sim, seconds: f64) {
+    for _ in 0..(seconds * 20.0).round() as usize {
+        sim.step(0.05);
+    }
+}
+
+fn num(ds: &DataServer, path: &[&str], prop: &str) -> f64 {
+    let g = ds.resolve(path).unwrap_or_else(|| panic!("no {path:?}"));
+    ds.get(g, prop).unwrap().as_f64().unwrap()
+}
+
+fn v(ds: &DataServer, name: &str) -> Guid {
+    ds.resolve(&["vehicles", name]).unwrap()
+}
+
+fn call(ds: &DataServer, g: Guid, m: &str, args: Vec<Value>) -> CallOutcome {
+    ds.call_wait(g, m, args, None)
+}
+
+#[test]
+fn the_same_seed_gives_the_same_world() {
+    let snap = |seed| {
+        let (ds, s) = sim(SimConfig { seed, ..SimConfig::default() });
+        run(&s, 30.0);
+        ds.quiesce();
+        ds.snapshot(ds.resolve(&["vehicles"]).unwrap()).unwrap()
+    };
+    let a = snap(42);
+    assert_eq!(a, snap(42));
+    assert_ne!(a, snap(43));
+    assert_eq!(a.children.len(), 4);
+}
+
+#[test]
+fn vehicles_appear_over_time() {
+    let (_ds, s) = sim(SimConfig { appear_every: 1.0, ..quiet() });
+    s.step(0.05);
+    assert_eq!(s.vehicle_names(), ["usv1"]);
+    run(&s, 1.0);
+    assert_eq!(s.vehicle_names(), ["usv1", "ugv1"]);
+    run(&s, 2.0);
+    assert_eq!(s.vehicle_names(), ["usv1", "ugv1", "uav1", "usv2"]);
+}
+
+#[test]
+fn the_world_model_follows_the_conventions() {
+    let (ds, s) = sim(quiet());
+    s.step(0.05);
+    let usv = v(&ds, "usv1");
+    let info = ds.info(usv).unwrap();
+    assert_eq!((&*info.kind, &*info.subtype), ("usv", "boat"));
+    let nav = ds.resolve(&["vehicles", "usv1", "nav"]).unwrap();
+    for (p, units) in
+        [("speed", "m/s"), ("heading", "deg"), ("x", "m"), ("lat", "deg"), ("goal_throttle", "%")]
+    {
+        assert_eq!(ds.meta(nav, p).unwrap().units.as_deref(), Some(units), "{p}");
+    }
+    // Goals are range-checked.
+    assert!(ds.set(nav, "goal_throttle", Value::Float(150.0)).is_err());
+    assert!(ds.set(nav, "goal_rudder", Value::Float(-31.0)).is_err());
+    assert!(ds.resolve(&["vehicles", "uav1", "cameras", "payload"]).is_some());
+    assert!(ds.resolve(&["vehicles", "ugv1", "cameras", "drive"]).is_some());
+    assert!(ds.get(v(&ds, "ugv1"), "battery_v").unwrap().as_f64().unwrap() > 20.0);
+}
+
+#[test]
+fn kinematics_follow_the_goals() {
+    let (ds, s) = sim(quiet());
+    s.step(0.05);
+    let usv = v(&ds, "usv1");
+    let nav = ds.resolve(&["vehicles", "usv1", "nav"]).unwrap();
+    ds.set(nav, "goal_throttle", Value::Float(50.0)).unwrap();
+    // Engine off: the goal does nothing.
+    run(&s, 5.0);
+    assert_eq!(num(&ds, &["vehicles", "usv1", "nav"], "speed"), 0.0);
+    assert!(call(&ds, usv, "arm", vec![Value::Bool(true)]).is_accepted());
+    assert!(call(&ds, usv, "start_engine", vec![]).is_accepted());
+    let fuel0 = num(&ds, &["vehicles", "usv1"], "fuel");
+    let h0 = num(&ds, &["vehicles", "usv1", "nav"], "heading");
+    run(&s, 20.0);
+    let speed = num(&ds, &["vehicles", "usv1", "nav"], "speed");
+    assert!((speed - 4.0).abs() < 0.05, "50% of 8 m/s, got {speed}");
+    assert_eq!(num(&ds, &["vehicles", "usv1", "nav"], "heading"), h0, "no rudder, no turn");
+    assert!(num(&ds, &["vehicles", "usv1"], "fuel") < fuel0);
+    ds.set(nav, "goal_rudder", Value::Float(15.0)).unwrap();
+    run(&s, 2.0);
+    let turned = (num(&ds, &["vehicles", "usv1", "nav"], "heading") - h0).rem_euclid(360.0);
+    assert!(turned > 10.0 && turned < 30.0, "half rudder turns right ~10°/s: {turned}");
+    // Stop zeroes the goals and the vehicle slows down.
+    assert!(call(&ds, usv, "stop", vec![]).is_accepted());
+    assert_eq!(ds.get(nav, "goal_throttle").unwrap(), Value::Float(0.0));
+    run(&s, 15.0);
+    assert!(num(&ds, &["vehicles", "usv1", "nav"], "speed") < 0.1);
+}
+
+#[test]
+fn refusals_carry_reasons() {
+    let (ds, s) = sim(quiet());
+    s.step(0.05);
+    let usv = v(&ds, "usv1");
+    assert_eq!(
+        call(&ds, usv, "start_engine", vec![]),
+        CallOutcome::Refused("not armed: arm before starting the engine".into())
+    );
+    assert!(call(&ds, usv, "arm", vec![Value::Bool(true)]).is_accepted());
+    s.set_fuel("usv1", 0.0);
+    assert_eq!(
+        call(&ds, usv, "start_engine", vec![]),
+        CallOutcome::Refused("no fuel: usv1 cannot start its engine".into())
+    );
+    let op = |n: &str| vec![Value::str(n)];
+    assert!(call(&ds, usv, "request_control", op("alice")).is_accepted());
+    assert_eq!(ds.get(usv, "control").unwrap(), Value::str("alice"));
+    assert_eq!(
+        call(&ds, usv, "request_control", op("bob")),
+        CallOutcome::Refused("control held by alice".into())
+    );
+    let routes = ds.resolve(&["vehicles", "usv1", "routes"]).unwrap();
+    let empty = match call(&ds, routes, "create_route", op("empty")) {
+        CallOutcome::Accepted(r) => r[0].clone(),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(
+        call(&ds, usv, "assign_route", vec![empty]),
+        CallOutcome::Refused("route `empty` has no waypoints".into())
+    );
+    assert!(matches!(call(&ds, usv, "set_mode", op("warp")), CallOutcome::Refused(_)));
+    assert_eq!(
+        call(&ds, usv, "goto", vec![Value::Float(1.0), Value::Float(2.0), Value::Float(0.0)]),
+        CallOutcome::Refused("engine is off".into())
+    );
+}
+
+#[test]
+fn routes_are_chains_edited_by_insert_between_and_delete_and_promote() {
+    let (ds, s) = sim(quiet());
+    s.step(0.05);
+    let patrol = ds.resolve(&["vehicles", "usv1", "routes", "patrol"]).unwrap();
+    let xs = |ds: &DataServer| -> Vec<(f64, f64)> {
+        route_waypoints(ds, patrol)
+            .iter()
+            .map(|w| mocu_host::world::pair(ds, *w, "x", "y").unwrap())
+            .collect()
+    };
+    let before = xs(&ds);
+    assert_eq!(before.len(), 4);
+    // The chain: the second waypoint is the child of the first.
+    let wps = route_waypoints(&ds, patrol);
+    assert_eq!(ds.parent(wps[1]).unwrap(), Some(wps[0]));
+    let args = vec![Value::Int(1), Value::Float(7.0), Value::Float(8.0)];
+    assert!(call(&ds, patrol, "insert_waypoint", args).is_accepted());
+    let after = xs(&ds);
+    assert_eq!(after.len(), 5);
+    assert_eq!(after[1], (7.0, 8.0));
+    assert_eq!((after[0], &after[2..]), (before[0], &before[1..]));
+    assert_eq!(ds.get(patrol, "count").unwrap(), Value::Int(5));
+    assert!(ds.get(route_waypoints(&ds, patrol)[1], "lat").is_ok(), "local routes get lat/lon too");
+    // Delete the first: the second is promoted into its place under the route.
+    assert!(call(&ds, patrol, "delete_waypoint", vec![Value::Int(0)]).is_accepted());
+    assert_eq!(xs(&ds), after[1..]);
+    assert_eq!(ds.parent(route_waypoints(&ds, patrol)[0]).unwrap(), Some(patrol));
+    // Delete the last.
+    assert!(call(&ds, patrol, "delete_waypoint", vec![Value::Int(3)]).is_accepted());
+    assert_eq!(xs(&ds), after[1..4]);
+    assert!(matches!(
+        call(&ds, patrol, "delete_waypoint", vec![Value::Int(9)]),
+        CallOutcome::Refused(_)
+    ));
+}
+
+#[test]
+fn an_assigned_route_is_followed_to_its_end() {
+    let (ds, s) = sim(quiet());
+    s.step(0.05);
+    let usv = v(&ds, "usv1");
+    let patrol = ds.resolve(&["vehicles", "usv1", "routes", "patrol"]).unwrap();
+    assert!(call(&ds, usv, "arm", vec![Value::Bool(true)]).is_accepted());
+    assert!(call(&ds, usv, "start_engine", vec![]).is_accepted());
+    assert!(call(&ds, usv, "assign_route", vec![Value::Guid(patrol)]).is_accepted());
+    assert_eq!(ds.get(usv, "mode").unwrap(), Value::str("route"));
+    run(&s, 240.0);
+    assert_eq!(ds.get(usv, "mode").unwrap(), Value::str("hold"));
+    let last = *route_waypoints(&ds, patrol).last().unwrap();
+    let (wx, wy) = mocu_host::world::pair(&ds, last, "x", "y").unwrap();
+    let (x, y) =
+        (num(&ds, &["vehicles", "usv1", "nav"], "x"), num(&ds, &["vehicles", "usv1", "nav"], "y"));
+    assert!(((x - wx).powi(2) + (y - wy).powi(2)).sqrt() < 15.0, "ended near the last waypoint");
+}
+
+#[test]
+fn camera_frames_flow_through_the_listener() {
+    let (ds, s) = sim(quiet());
+    s.step(0.05);
+    let cam = ds.resolve(&["vehicles", "usv1", "cameras", "drive"]).unwrap();
+    let display = ds.create_object(ds.root(), ObjectInfo::new("display", "window")).unwrap();
+    let got: Arc<Mutex<Vec<(usize, i64, i64, i64)>>> = Arc::default();
+    let g = got.clone();
+    ds.publish_method(
+        display,
+        MethodSpec::new("frame")
+            .param(ParamSpec::new("rgb", ValueKind::Bytes))
+            .param(ParamSpec::new("width", ValueKind::Int))
+            .param(ParamSpec::new("height", ValueKind::Int))
+            .param(ParamSpec::new("n", ValueKind::Int)),
+        move |c: Call| {
+            let Value::Bytes(px) = &c.args[0] else { panic!("bytes") };
+            let a = |i: usize| c.args[i].as_i64().unwrap();
+            g.lock().unwrap().push((px.len(), a(1), a(2), a(3)));
+            c.responder.accept(vec![]);
+        },
+    )
+    .unwrap();
+    ds.join(cam, display, "frame", Overflow::DropOldest, 8).unwrap();
+    run(&s, 1.0);
+    ds.quiesce();
+    let frames = got.lock().unwrap().clone();
+    assert!(frames.len() >= 9 && frames.len() <= 11, "10 fps for 1 s: {}", frames.len());
+    assert_eq!(frames[0].0, 64 * 48 * 3);
+    assert_eq!((frames[0].1, frames[0].2), (64, 48));
+    assert!(frames.windows(2).all(|w| w[1].3 == w[0].3 + 1), "in order, none lost");
+    assert_eq!(ds.get(cam, "frames").unwrap(), Value::Int(*frames.last().map(|f| &f.3).unwrap()));
+}
