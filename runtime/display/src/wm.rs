@@ -1,0 +1,914 @@
+//! The window manager module (paper §5.1): reads the windows under `root.display`, orders
+//! them (layer, then declaration order), asks each window's painter to repaint when its
+//! window is dirty, and hands the layers, bottom first, to a compositor. It draws nothing
+//! of its own.
+//!
+//! Architecture invariant: the window manager knows no painter. It finds windows by type
+//! (`window`) in the world model and calls whatever `paint` method is published under
+//! them; a window no module claims is an empty layer.
+
+use crate::anim::{Animator, Easing};
+use crate::compose::LayerView;
+use crate::geom::{IRect, Size};
+use crate::paint;
+use crate::skia::SkiaCanvas;
+use mocu_dataserver::{
+    CallOptions, CallOutcome, DataServer, DsError, Executor, Guid, Kind, MethodSpec,
+    Notification, ParamSpec, Subject, SubscriptionId, Topic, Value, ValueKind,
+};
+use parking_lot::{Condvar, Mutex};
+use std::collections::HashMap;
+use std::sync::Arc;
+use std::time::Duration;
+use tiny_skia::Pixmap;
+
+/// The object type of a window.
+pub const WINDOW_TYPE: &str = "window";
+/// The property a failed painter's error is written to (ignored for dirtiness).
+pub const PAINT_ERROR: &str = "paint_error";
+
+/// A window's properties as the window manager reads them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WinProps {
+    pub name: Arc<str>,
+    pub subtype: Arc<str>,
+    pub layer: i64,
+    pub order: i64,
+    pub x: f64,
+    pub y: f64,
+    /// `None` until published: the display's width.
+    pub w: Option<f64>,
+    /// `None` until published: the display's height.
+    pub h: Option<f64>,
+    pub opacity: f64,
+    pub visible: bool,
+    pub clip: bool,
+}
+
+impl WinProps {
+    fn new(name: Arc<str>, subtype: Arc<str>) -> WinProps {
+        WinProps {
+            name,
+            subtype,
+            layer: 0,
+            order: 0,
+            x: 0.0,
+            y: 0.0,
+            w: None,
+            h: None,
+            opacity: 1.0,
+            visible: true,
+            clip: true,
+        }
+    }
+
+    /// The window's pixel rectangle on the screen.
+    pub fn rect(&self, display: (u32, u32)) -> IRect {
+        let w = self.w.unwrap_or(display.0 as f64);
+        let h = self.h.unwrap_or(display.1 as f64);
+        IRect::new(self.x.round() as i32, self.y.round() as i32, w.round() as i32, h.round() as i32)
+    }
+}
+
+/// What a property change means for a window.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Effect {
+    None,
+    Recomposite,
+    Repaint,
+}
+
+/// Applies one property value; returns what it changes.
+fn apply_prop(p: &mut WinProps, name: &str, v: Option<&Value>) -> Effect {
+    let f = |v: Option<&Value>, d: f64| v.and_then(Value::as_f64).unwrap_or(d);
+    let before = p.clone();
+    let effect = match name {
+        "x" => {
+            p.x = f(v, 0.0);
+            Effect::Recomposite
+        }
+        "y" => {
+            p.y = f(v, 0.0);
+            Effect::Recomposite
+        }
+        "w" => {
+            p.w = v.and_then(Value::as_f64);
+            Effect::Repaint
+        }
+        "h" => {
+            p.h = v.and_then(Value::as_f64);
+            Effect::Repaint
+        }
+        "layer" => {
+            p.layer = v.and_then(Value::as_f64).unwrap_or(0.0) as i64;
+            Effect::Recomposite
+        }
+        "order" => {
+            p.order = v.and_then(Value::as_f64).unwrap_or(0.0) as i64;
+            Effect::Recomposite
+        }
+        "opacity" => {
+            p.opacity = f(v, 1.0).clamp(0.0, 1.0);
+            Effect::Recomposite
+        }
+        "visible" => {
+            p.visible = v.and_then(Value::as_bool).unwrap_or(true);
+            Effect::Recomposite
+        }
+        "clip" => {
+            p.clip = v.and_then(Value::as_bool).unwrap_or(true);
+            Effect::Repaint
+        }
+        PAINT_ERROR | "frame" => return Effect::None,
+        // `revision`, `source` and any property of the painter's own: new content.
+        _ => return Effect::Repaint,
+    };
+    if *p == before { Effect::None } else { effect }
+}
+
+struct WinEntry {
+    props: WinProps,
+    sub: Option<SubscriptionId>,
+    repaint: bool,
+    /// Window-local damage from `invalidate` calls.
+    damage: IRect,
+}
+
+#[derive(Default)]
+struct SharedState {
+    windows: HashMap<Guid, WinEntry>,
+    removed: Vec<Guid>,
+    /// `width`/`height` of `root.display`, once published.
+    size: (Option<f64>, Option<f64>),
+    size_changed: bool,
+    reindex: bool,
+    /// Something changed since the last frame.
+    pending: bool,
+}
+
+/// State shared between the subscription callbacks and the frame thread.
+pub(crate) struct Shared {
+    state: Mutex<SharedState>,
+    wake: Condvar,
+}
+
+impl Shared {
+    fn changed(&self, st: &mut SharedState) {
+        st.pending = true;
+        self.wake.notify_all();
+    }
+}
+
+/// A layer: the last rendering of a window, owned by the frame thread.
+struct Layer {
+    pixmap: Option<Pixmap>,
+    /// Window-local coordinates of pixmap pixel (0, 0).
+    origin: (i32, i32),
+    painted_size: (i32, i32),
+    painted_clip: bool,
+    /// Needs a full repaint before it can be shown.
+    stale: bool,
+    /// Window-local damage not yet repainted.
+    damage: IRect,
+    /// The painter failed: not composited until it paints successfully.
+    failed: Option<String>,
+    /// No painter claimed the window: nothing to composite.
+    unclaimed: bool,
+    /// Screen position of the window, last frame.
+    pos: (i32, i32),
+    /// Where the pixmap was composited last frame (empty: not shown).
+    shown: IRect,
+    opacity: f32,
+    /// Pixmap region repainted since last composited.
+    changed: Option<IRect>,
+}
+
+impl Layer {
+    fn new() -> Layer {
+        Layer {
+            pixmap: None,
+            origin: (0, 0),
+            painted_size: (0, 0),
+            painted_clip: true,
+            stale: true,
+            damage: IRect::default(),
+            failed: None,
+            unclaimed: false,
+            pos: (0, 0),
+            shown: IRect::default(),
+            opacity: 1.0,
+            changed: None,
+        }
+    }
+}
+
+/// A point hit on a window.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Hit {
+    pub window: Guid,
+    pub name: Arc<str>,
+    /// The point in window-local pixels.
+    pub x: f32,
+    pub y: f32,
+}
+
+/// What one frame did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    pub frame: u64,
+    /// False when nothing had changed: no painting, no compositing.
+    pub drawn: bool,
+    /// Windows repainted whole, bottom first.
+    pub repainted: Vec<Arc<str>>,
+    /// Windows repainted in part (damage rectangles).
+    pub partial: Vec<Arc<str>>,
+    /// Windows whose painter failed (panicked, refused, failed), with why; their layers
+    /// were skipped.
+    pub failed: Vec<(Arc<str>, String)>,
+    /// The screen rectangle recomposited.
+    pub damage: IRect,
+    /// Layers blended into the damage rectangle.
+    pub composited: usize,
+    pub paint_time: Duration,
+    pub composite_time: Duration,
+}
+
+pub(crate) struct Planned {
+    pub stats: FrameStats,
+    pub resized: Option<(u32, u32)>,
+}
+
+/// The window manager of one display.
+pub struct WindowManager {
+    ds: DataServer,
+    display: Guid,
+    shared: Arc<Shared>,
+    subs: Arc<Mutex<Vec<SubscriptionId>>>,
+    layers: HashMap<Guid, Layer>,
+    props: HashMap<Guid, WinProps>,
+    index: HashMap<Guid, usize>,
+    /// Windows bottom first, as last composited.
+    stacking: Vec<Guid>,
+    size: (u32, u32),
+    animator: Arc<Animator>,
+    hover: Option<Guid>,
+    capture: Option<(Guid, i64)>,
+}
+
+fn arg_f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(0.0)
+}
+
+impl WindowManager {
+    /// Starts managing the windows under `display` (an existing `display` object).
+    pub(crate) fn new(
+        ds: &DataServer,
+        display: Guid,
+        size: (u32, u32),
+        animator: Arc<Animator>,
+    ) -> Result<WindowManager, DsError> {
+        let shared = Arc::new(Shared { state: Mutex::default(), wake: Condvar::new() });
+        let exec = ds.serial_executor();
+        let subs: Arc<Mutex<Vec<SubscriptionId>>> = Arc::default();
+        {
+            let sh = shared.clone();
+            let sub = ds.subscribe_on(&exec, Topic::properties(display), move |n| {
+                let Some(name) = n.property_name() else { return };
+                let v = n.value().and_then(Value::as_f64);
+                let mut st = sh.state.lock();
+                match name.as_str() {
+                    "width" => st.size.0 = v,
+                    "height" => st.size.1 = v,
+                    _ => return,
+                }
+                st.size_changed = true;
+                sh.changed(&mut st);
+            })?;
+            subs.lock().push(sub);
+        }
+        {
+            let sh = shared.clone();
+            let ds2 = ds.clone();
+            let ex2 = exec.clone();
+            let subs2 = subs.clone();
+            let sub = ds.subscribe_on(&exec, Topic::children(display), move |n| {
+                on_child(&ds2, &ex2, &sh, &subs2, n);
+            })?;
+            subs.lock().push(sub);
+        }
+        publish_wm_methods(ds, display, &animator)?;
+        Ok(WindowManager {
+            ds: ds.clone(),
+            display,
+            shared,
+            subs,
+            layers: HashMap::new(),
+            props: HashMap::new(),
+            index: HashMap::new(),
+            stacking: Vec::new(),
+            size,
+            animator,
+            hover: None,
+            capture: None,
+        })
+    }
+
+    pub fn display_object(&self) -> Guid {
+        self.display
+    }
+
+    pub fn animator(&self) -> &Arc<Animator> {
+        &self.animator
+    }
+
+    /// Waits until something changes or `timeout` passes; returns whether something
+    /// changed. A display with nothing changing sleeps here (no CPU).
+    pub fn wait_for_change(&self, timeout: Duration) -> bool {
+        let mut st = self.shared.state.lock();
+        if !st.pending {
+            self.shared.wake.wait_for(&mut st, timeout);
+        }
+        st.pending
+    }
+
+    /// Marks everything for repainting (after a backend change).
+    pub fn invalidate_all(&mut self) {
+        for l in self.layers.values_mut() {
+            l.stale = true;
+        }
+        let mut st = self.shared.state.lock();
+        self.shared.changed(&mut st);
+    }
+
+    /// Takes the changes since the last frame, calls the painters of dirty windows and
+    /// works out the damage. Returns `None` when nothing changed.
+    pub(crate) fn plan(&mut self, frame: u64, force: bool) -> Option<Planned> {
+        let t0 = std::time::Instant::now();
+        let mut stats = FrameStats { frame, ..FrameStats::default() };
+        let (snaps, removed, resized, reindex) = {
+            let mut st = self.shared.state.lock();
+            if !st.pending && !force {
+                return None;
+            }
+            st.pending = false;
+            let snaps: Vec<(Guid, WinProps, bool, IRect)> = st
+                .windows
+                .iter_mut()
+                .map(|(g, e)| {
+                    (*g, e.props.clone(), std::mem::take(&mut e.repaint), std::mem::take(&mut e.damage))
+                })
+                .collect();
+            let removed = std::mem::take(&mut st.removed);
+            let resized = if std::mem::take(&mut st.size_changed) {
+                let w = st.size.0.unwrap_or(self.size.0 as f64).round().max(1.0) as u32;
+                let h = st.size.1.unwrap_or(self.size.1 as f64).round().max(1.0) as u32;
+                ((w, h) != self.size).then_some((w, h))
+            } else {
+                None
+            };
+            (snaps, removed, resized, std::mem::take(&mut st.reindex))
+        };
+        let mut damage = IRect::default();
+        if let Some(sz) = resized {
+            self.size = sz;
+            damage = self.bounds();
+            for l in self.layers.values_mut() {
+                if !l.painted_clip {
+                    l.stale = true;
+                }
+            }
+        }
+        if force {
+            damage = self.bounds();
+        }
+        for g in removed {
+            if let Some(l) = self.layers.remove(&g) {
+                damage = damage.union(&l.shown);
+            }
+            self.props.remove(&g);
+        }
+        if reindex || self.index.len() != snaps.len() {
+            let kids = self.ds.children(self.display).unwrap_or_default();
+            self.index = kids.into_iter().enumerate().map(|(i, g)| (g, i)).collect();
+        }
+        let mut snaps = snaps;
+        snaps.sort_by_key(|(g, p, _, _)| (p.layer, p.order, self.index.get(g).copied().unwrap_or(usize::MAX), *g));
+        let stacking: Vec<Guid> = snaps.iter().map(|s| s.0).collect();
+        if stacking != self.stacking {
+            // Windows whose place in the stack changed are recomposited.
+            let old: HashMap<Guid, usize> =
+                self.stacking.iter().enumerate().map(|(i, g)| (*g, i)).collect();
+            for (i, g) in stacking.iter().enumerate() {
+                if old.get(g) != Some(&i)
+                    && let Some(l) = self.layers.get(g)
+                {
+                    damage = damage.union(&l.shown);
+                }
+            }
+        }
+        self.stacking = stacking;
+        for (g, props, repaint, dmg) in snaps {
+            let r = props.rect(self.size);
+            let layer = self.layers.entry(g).or_insert_with(Layer::new);
+            if repaint
+                || layer.painted_size != (r.w, r.h)
+                || layer.painted_clip != props.clip
+                || (!props.clip && resized.is_some())
+            {
+                layer.stale = true;
+            }
+            layer.damage = layer.damage.union(&dmg);
+            let visible = props.visible && props.opacity > 0.0 && r.w > 0 && r.h > 0;
+            if visible {
+                if layer.stale {
+                    self.paint(g, &props, r, frame, None, &mut stats);
+                } else if !layer.damage.is_empty() {
+                    let d = layer.damage;
+                    self.paint(g, &props, r, frame, Some(d), &mut stats);
+                }
+            }
+            let layer = self.layers.get_mut(&g).expect("inserted above");
+            layer.pos = (r.x, r.y);
+            let shown = match &layer.pixmap {
+                Some(pm) if visible && layer.failed.is_none() && !layer.unclaimed && !layer.stale => {
+                    IRect::new(
+                        r.x + layer.origin.0,
+                        r.y + layer.origin.1,
+                        pm.width() as i32,
+                        pm.height() as i32,
+                    )
+                }
+                _ => IRect::default(),
+            };
+            let opacity = props.opacity as f32;
+            if shown != layer.shown || (opacity != layer.opacity && !shown.is_empty()) {
+                damage = damage.union(&layer.shown).union(&shown);
+            }
+            if let Some(c) = layer.changed
+                && !shown.is_empty()
+            {
+                damage = damage.union(&c.offset(shown.x, shown.y));
+            }
+            layer.shown = shown;
+            layer.opacity = opacity;
+            self.props.insert(g, props);
+        }
+        stats.damage = damage.intersect(&self.bounds());
+        stats.drawn = !stats.damage.is_empty()
+            || !stats.repainted.is_empty()
+            || !stats.partial.is_empty()
+            || !stats.failed.is_empty();
+        stats.paint_time = t0.elapsed();
+        Some(Planned { stats, resized })
+    }
+
+    /// The layers to composite, bottom first, with what changed in each.
+    pub(crate) fn layer_views(&mut self) -> Vec<LayerView<'_>> {
+        let mut out = Vec::with_capacity(self.stacking.len());
+        for g in &self.stacking {
+            let Some(l) = self.layers.get(g) else { continue };
+            if l.shown.is_empty() {
+                continue;
+            }
+            let Some(pm) = &l.pixmap else { continue };
+            out.push(LayerView {
+                window: *g,
+                pixmap: pm,
+                x: l.shown.x,
+                y: l.shown.y,
+                opacity: l.opacity,
+                changed: l.changed,
+            });
+        }
+        out
+    }
+
+    /// Forgets the per-layer "changed" regions once a compositor has used them.
+    pub(crate) fn composited(&mut self) {
+        for l in self.layers.values_mut() {
+            l.changed = None;
+        }
+    }
+
+    pub fn bounds(&self) -> IRect {
+        IRect::new(0, 0, self.size.0 as i32, self.size.1 as i32)
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// Calls the window's painter over the whole window (`region` None) or a damaged part.
+    fn paint(
+        &mut self,
+        g: Guid,
+        props: &WinProps,
+        r: IRect,
+        frame: u64,
+        region: Option<IRect>,
+        stats: &mut FrameStats,
+    ) {
+        let size = self.size;
+        let layer = self.layers.get_mut(&g).expect("the caller made the layer");
+        let wsize = Size::new(r.w as f32, r.h as f32);
+        let mut scratch_at = IRect::default();
+        let canvas = match region {
+            None => {
+                let (pw, ph, origin) = if props.clip {
+                    (r.w as u32, r.h as u32, (0, 0))
+                } else {
+                    (size.0, size.1, (-r.x, -r.y))
+                };
+                let pm = match layer.pixmap.take() {
+                    Some(mut pm) if pm.width() == pw && pm.height() == ph => {
+                        pm.fill(tiny_skia::Color::TRANSPARENT);
+                        pm
+                    }
+                    _ => match Pixmap::new(pw, ph) {
+                        Some(pm) => pm,
+                        None => return,
+                    },
+                };
+                layer.origin = origin;
+                SkiaCanvas::new(pm, origin, wsize)
+            }
+            Some(d) => {
+                let Some(pm) = &layer.pixmap else { return };
+                let extent = IRect::new(layer.origin.0, layer.origin.1, pm.width() as i32, pm.height() as i32);
+                let d = d.intersect(&extent);
+                if d.is_empty() {
+                    layer.damage = IRect::default();
+                    return;
+                }
+                let Some(scratch) = Pixmap::new(d.w as u32, d.h as u32) else { return };
+                scratch_at = d;
+                SkiaCanvas::new(scratch, (d.x, d.y), wsize)
+            }
+        };
+        paint::install(canvas);
+        let outcome = Arc::new(Mutex::new(None));
+        let o2 = outcome.clone();
+        let args = vec![Value::Int(frame as i64), Value::Float(r.w as f64), Value::Float(r.h as f64)];
+        self.ds.call(g, "paint", args, Some(CallOptions::immediate()), move |o| {
+            *o2.lock() = Some(o);
+        });
+        let canvas = paint::take();
+        let outcome = outcome.lock().take();
+        let layer = self.layers.get_mut(&g).expect("still there");
+        let Some(canvas) = canvas else { return };
+        let drawn = canvas.into_pixmap();
+        let was_failed = layer.failed.take().is_some();
+        layer.unclaimed = false;
+        match outcome {
+            Some(CallOutcome::Accepted(_)) | None => {}
+            Some(CallOutcome::NoSuchMethod) => layer.unclaimed = true,
+            Some(CallOutcome::NoSuchObject) => layer.unclaimed = true,
+            Some(other) => {
+                let why = other.to_string();
+                stats.failed.push((props.name.clone(), why.clone()));
+                let _ = self.ds.set(g, PAINT_ERROR, Value::str(&why));
+                layer.failed = Some(why);
+            }
+        }
+        if was_failed && layer.failed.is_none() {
+            let _ = self.ds.set(g, PAINT_ERROR, Value::str(""));
+        }
+        match region {
+            None => {
+                layer.changed = Some(IRect::new(0, 0, drawn.width() as i32, drawn.height() as i32));
+                layer.pixmap = Some(drawn);
+                layer.painted_size = (r.w, r.h);
+                layer.painted_clip = props.clip;
+                layer.stale = false;
+                layer.damage = IRect::default();
+                stats.repainted.push(props.name.clone());
+            }
+            Some(_) => {
+                let Some(pm) = layer.pixmap.as_mut() else { return };
+                // The scratch pixmap replaces its rectangle of the layer.
+                let at = scratch_at.offset(-layer.origin.0, -layer.origin.1);
+                copy_into(pm, &drawn, at.x, at.y);
+                layer.changed = Some(layer.changed.unwrap_or_default().union(&at));
+                layer.damage = IRect::default();
+                stats.partial.push(props.name.clone());
+            }
+        }
+    }
+
+    /// The topmost window whose pixel at screen point (x, y) is not transparent (or whose
+    /// `hit` method says so). Invisible, failed and unclaimed windows are passed through.
+    pub fn hit_test(&self, x: f32, y: f32) -> Option<Hit> {
+        let (px, py) = (x.floor() as i32, y.floor() as i32);
+        for g in self.stacking.iter().rev() {
+            let Some(l) = self.layers.get(g) else { continue };
+            let r = l.shown;
+            if r.is_empty() || px < r.x || py < r.y || px >= r.right() || py >= r.bottom() {
+                continue;
+            }
+            let (lx, ly) = (x - l.pos.0 as f32, y - l.pos.1 as f32);
+            let name = self.props.get(g).map(|p| p.name.clone()).unwrap_or_else(|| "".into());
+            let hit = Hit { window: *g, name, x: lx, y: ly };
+            let slot = Arc::new(Mutex::new(None));
+            let s2 = slot.clone();
+            let args = vec![Value::Float(lx as f64), Value::Float(ly as f64)];
+            self.ds.call(*g, "hit", args, Some(CallOptions::immediate()), move |o| {
+                *s2.lock() = Some(o)
+            });
+            let answered = slot.lock().take();
+            match answered {
+                Some(CallOutcome::Accepted(v)) => {
+                    if v.first().and_then(Value::as_bool) == Some(true) {
+                        return Some(hit);
+                    }
+                    continue;
+                }
+                Some(CallOutcome::NoSuchMethod) | None => {}
+                Some(_) => continue,
+            }
+            let Some(pm) = &l.pixmap else { continue };
+            let i = ((py - r.y) as usize * pm.width() as usize + (px - r.x) as usize) * 4 + 3;
+            if pm.data().get(i).copied().unwrap_or(0) > 0 {
+                return Some(hit);
+            }
+        }
+        None
+    }
+
+    /// Routes a pointer event: to the window holding the pointer capture (a button is
+    /// down), else to the window hit. Sends `enter`/`leave` when the hovered window
+    /// changes. Returns the window that received the event.
+    pub fn pointer(&mut self, x: f32, y: f32, ev: crate::PointerEvent) -> Option<Hit> {
+        use crate::PointerEvent as P;
+        let hit = self.hit_test(x, y);
+        let target = match self.capture {
+            Some((g, _)) => {
+                let l = self.layers.get(&g);
+                let (lx, ly) = l.map_or((x, y), |l| (x - l.pos.0 as f32, y - l.pos.1 as f32));
+                let name = self.props.get(&g).map(|p| p.name.clone()).unwrap_or_else(|| "".into());
+                Some(Hit { window: g, name, x: lx, y: ly })
+            }
+            None => hit.clone(),
+        };
+        let hovered = hit.as_ref().map(|h| h.window);
+        if hovered != self.hover && !matches!(ev, P::Leave) {
+            if let Some(old) = self.hover {
+                self.send(old, "leave", -1, 0.0, 0.0);
+            }
+            if let Some(h) = &hit {
+                self.send(h.window, "enter", -1, h.x, h.y);
+            }
+            self.hover = hovered;
+        }
+        let t = target?;
+        match ev {
+            P::Move => self.send(t.window, "move", -1, t.x, t.y),
+            P::Down(b) => {
+                self.capture = Some((t.window, b as i64));
+                self.send(t.window, "down", b as i64, t.x, t.y);
+            }
+            P::Up(b) => {
+                if self.capture.is_some_and(|(_, cb)| cb == b as i64) {
+                    self.capture = None;
+                }
+                self.send(t.window, "up", b as i64, t.x, t.y);
+            }
+            P::Leave => {
+                if let Some(old) = self.hover.take() {
+                    self.send(old, "leave", -1, 0.0, 0.0);
+                }
+            }
+        }
+        Some(t)
+    }
+
+    fn send(&self, g: Guid, kind: &str, button: i64, x: f32, y: f32) {
+        let args =
+            vec![Value::str(kind), Value::Int(button), Value::Float(x as f64), Value::Float(y as f64)];
+        self.ds.call(g, "pointer", args, None, |_| {});
+    }
+}
+
+impl Drop for WindowManager {
+    fn drop(&mut self) {
+        for s in self.subs.lock().drain(..) {
+            self.ds.unsubscribe(s);
+        }
+        for m in ["swap", "animate", "animate_eased"] {
+            let _ = self.ds.unpublish_method(self.display, m);
+        }
+        let windows: Vec<Guid> = self.shared.state.lock().windows.keys().copied().collect();
+        for g in windows {
+            let _ = self.ds.unpublish_method(g, "invalidate");
+        }
+    }
+}
+
+/// Copies `src` over `dst` at (x, y), replacing pixels (no blending).
+fn copy_into(dst: &mut Pixmap, src: &Pixmap, x: i32, y: i32) {
+    let r = IRect::new(x, y, src.width() as i32, src.height() as i32)
+        .intersect(&IRect::new(0, 0, dst.width() as i32, dst.height() as i32));
+    if r.is_empty() {
+        return;
+    }
+    let dw = dst.width() as usize * 4;
+    let sw = src.width() as usize * 4;
+    let s = src.data();
+    let d = dst.data_mut();
+    for row in r.y..r.bottom() {
+        let sy = (row - y) as usize;
+        let sx = (r.x - x) as usize * 4;
+        let n = r.w as usize * 4;
+        d[row as usize * dw + r.x as usize * 4..][..n].copy_from_slice(&s[sy * sw + sx..][..n]);
+    }
+}
+
+fn on_child(
+    ds: &DataServer,
+    exec: &Executor,
+    sh: &Arc<Shared>,
+    subs: &Arc<Mutex<Vec<SubscriptionId>>>,
+    n: &Notification,
+) {
+    let (guid, name, kind) = match &n.subject {
+        Subject::Child { guid, name, kind, .. } => (*guid, name.clone(), kind.clone()),
+        Subject::Object => {
+            // root.display itself was deleted: every window goes.
+            let mut st = sh.state.lock();
+            let gone: Vec<Guid> = st.windows.keys().copied().collect();
+            st.windows.clear();
+            st.removed.extend(gone);
+            sh.changed(&mut st);
+            return;
+        }
+        Subject::Property { .. } => return,
+    };
+    let is_window = &*kind == WINDOW_TYPE;
+    let known = sh.state.lock().windows.contains_key(&guid);
+    match n.kind {
+        Kind::New | Kind::Changed if is_window && !known => {
+            let subtype = ds.info(guid).map(|i| i.subtype).unwrap_or_else(|_| "".into());
+            let mut props = WinProps::new(name, subtype);
+            for (p, v) in ds.properties(guid).unwrap_or_default() {
+                apply_prop(&mut props, p.as_str(), Some(&v));
+            }
+            {
+                let mut st = sh.state.lock();
+                st.windows.insert(guid, WinEntry { props, sub: None, repaint: true, damage: IRect::default() });
+                st.reindex = true;
+                sh.changed(&mut st);
+            }
+            publish_invalidate(ds, guid, sh);
+            let sh2 = sh.clone();
+            let sub = ds.subscribe_on(exec, Topic::properties(guid), move |n| {
+                let Some(name) = n.property_name() else { return };
+                let mut st = sh2.state.lock();
+                let Some(e) = st.windows.get_mut(&guid) else { return };
+                let effect = apply_prop(&mut e.props, name.as_str(), n.value());
+                if n.kind == Kind::New && effect == Effect::None {
+                    return;
+                }
+                match effect {
+                    Effect::None => return,
+                    Effect::Recomposite => {}
+                    Effect::Repaint => e.repaint = true,
+                }
+                sh2.changed(&mut st);
+            });
+            if let Ok(sub) = sub {
+                subs.lock().push(sub);
+                if let Some(e) = sh.state.lock().windows.get_mut(&guid) {
+                    e.sub = Some(sub);
+                }
+            }
+        }
+        Kind::Changed if is_window => {
+            let subtype = ds.info(guid).map(|i| i.subtype).unwrap_or_else(|_| "".into());
+            let mut st = sh.state.lock();
+            if let Some(e) = st.windows.get_mut(&guid) {
+                e.props.name = name;
+                e.props.subtype = subtype;
+                e.repaint = true;
+            }
+            sh.changed(&mut st);
+        }
+        Kind::New => {}
+        Kind::Changed | Kind::Deleted => {
+            let mut st = sh.state.lock();
+            if let Some(e) = st.windows.remove(&guid) {
+                if let Some(s) = e.sub {
+                    ds.unsubscribe(s);
+                    subs.lock().retain(|x| *x != s);
+                }
+                st.removed.push(guid);
+                st.reindex = true;
+                sh.changed(&mut st);
+            }
+        }
+    }
+}
+
+fn publish_invalidate(ds: &DataServer, window: Guid, sh: &Arc<Shared>) {
+    let sh = sh.clone();
+    let spec = MethodSpec::new("invalidate")
+        .param(ParamSpec::new("x", ValueKind::Float))
+        .param(ParamSpec::new("y", ValueKind::Float))
+        .param(ParamSpec::new("w", ValueKind::Float))
+        .param(ParamSpec::new("h", ValueKind::Float))
+        .defaults(CallOptions::immediate())
+        .describe("Marks a window-local rectangle of the window for repainting at the next frame");
+    let _ = ds.publish_method_fn(window, spec, move |a| {
+        let r = IRect::covering(crate::geom::Rect::new(
+            arg_f(&a[0]) as f32,
+            arg_f(&a[1]) as f32,
+            arg_f(&a[2]) as f32,
+            arg_f(&a[3]) as f32,
+        ));
+        let mut st = sh.state.lock();
+        let Some(e) = st.windows.get_mut(&window) else {
+            return CallOutcome::Failed("not a managed window".into());
+        };
+        e.damage = e.damage.union(&r);
+        sh.changed(&mut st);
+        CallOutcome::Accepted(vec![])
+    });
+}
+
+/// `swap(a, b, ms)`, `animate(window, x, y, w, h, ms)` and
+/// `animate_eased(window, x, y, w, h, ms, easing)` on `root.display`.
+fn publish_wm_methods(ds: &DataServer, display: Guid, animator: &Arc<Animator>) -> Result<(), DsError> {
+    let find = {
+        let ds = ds.clone();
+        move |name: &str| -> Option<Guid> {
+            let g = ds.find_child(display, name).ok()??;
+            (ds.info(g).ok()?.kind.as_ref() == WINDOW_TYPE).then_some(g)
+        }
+    };
+    let an = animator.clone();
+    let f2 = find.clone();
+    ds.publish_method_fn(
+        display,
+        MethodSpec::new("swap")
+            .param(ParamSpec::new("a", ValueKind::String))
+            .param(ParamSpec::new("b", ValueKind::String))
+            .param(ParamSpec::new("ms", ValueKind::Int))
+            .defaults(CallOptions::immediate())
+            .describe("Exchanges two windows' rectangles, animated with ease-in-out"),
+        move |a| {
+            let (Some(x), Some(y)) = (a[0].as_str().and_then(&f2), a[1].as_str().and_then(&f2)) else {
+                return CallOutcome::Refused("no such window".into());
+            };
+            let ms = a[2].as_i64().unwrap_or(0).max(0) as u64;
+            an.swap(x, y, Duration::from_millis(ms), Easing::EaseInOut);
+            CallOutcome::Accepted(vec![])
+        },
+    )?;
+    let rect_params = |spec: MethodSpec| {
+        spec.param(ParamSpec::new("window", ValueKind::String))
+            .param(ParamSpec::new("x", ValueKind::Float))
+            .param(ParamSpec::new("y", ValueKind::Float))
+            .param(ParamSpec::new("w", ValueKind::Float))
+            .param(ParamSpec::new("h", ValueKind::Float))
+            .param(ParamSpec::new("ms", ValueKind::Int))
+            .defaults(CallOptions::immediate())
+    };
+    for eased in [false, true] {
+        let an = animator.clone();
+        let f3 = find.clone();
+        let mut spec = rect_params(MethodSpec::new(if eased { "animate_eased" } else { "animate" }));
+        if eased {
+            spec = spec.param(ParamSpec::new("easing", ValueKind::String));
+        }
+        ds.publish_method_fn(display, spec.describe("Moves/resizes a window, animated"), move |a| {
+            let Some(w) = a[0].as_str().and_then(&f3) else {
+                return CallOutcome::Refused("no such window".into());
+            };
+            let easing = if eased {
+                match a[6].as_str().and_then(Easing::parse) {
+                    Some(e) => e,
+                    None => return CallOutcome::Refused("unknown easing".into()),
+                }
+            } else {
+                Easing::EaseInOut
+            };
+            let to = [arg_f(&a[1]), arg_f(&a[2]), arg_f(&a[3]), arg_f(&a[4])];
+            let ms = a[5].as_i64().unwrap_or(0).max(0) as u64;
+            an.start(w, to, Duration::from_millis(ms), easing);
+            CallOutcome::Accepted(vec![])
+        })?;
+    }
+    Ok(())
+}
+
+impl WindowManager {
+    pub(crate) fn shared_handle(&self) -> Arc<Shared> {
+        self.shared.clone()
+    }
+}
+
+pub(crate) fn wait_pending(sh: &Shared, timeout: Duration) -> bool {
+    let mut st = sh.state.lock();
+    if !st.pending {
+        sh.wake.wait_for(&mut st, timeout);
+    }
+    st.pending
+}
