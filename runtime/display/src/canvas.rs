@@ -12,7 +12,11 @@ pub enum Brush {
     Solid(Color),
     /// A linear gradient from `start` to `end`; `stops` are (offset 0..=1, colour), in
     /// order. Outside the segment the end colours extend.
-    Linear { start: Point, end: Point, stops: Vec<(f32, Color)> },
+    Linear {
+        start: Point,
+        end: Point,
+        stops: Vec<(f32, Color)>,
+    },
 }
 
 impl From<Color> for Brush {

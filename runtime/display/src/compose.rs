@@ -148,7 +148,8 @@ mod tests {
 
     #[test]
     fn blending_matches_the_float_formula_within_one() {
-        let samples = [[0, 0, 0, 0], [255, 0, 0, 255], [10, 20, 30, 40], [128, 64, 0, 128], [1, 1, 1, 1]];
+        let samples =
+            [[0, 0, 0, 0], [255, 0, 0, 255], [10, 20, 30, 40], [128, 64, 0, 128], [1, 1, 1, 1]];
         for d in samples {
             for s in samples {
                 for o in [0u8, 1, 77, 128, 200, 255] {

@@ -40,7 +40,13 @@ pub fn gauge(
     let start = 0.75 * PI;
     let sweep = 1.5 * PI;
     let t = ((value - min) / (max - min)).clamp(0.0, 1.0);
-    let color = if t > 0.85 { ALARM } else if t > 0.7 { WARN } else { EDGE };
+    let color = if t > 0.85 {
+        ALARM
+    } else if t > 0.7 {
+        WARN
+    } else {
+        EDGE
+    };
     c.fill_circle(center, radius, PANEL);
     c.stroke_path(
         &Path::circle(center, radius - 1.0),
@@ -136,7 +142,11 @@ pub fn sea_chart(c: &mut dyn Canvas, vehicle: Point, heading_deg: f32) {
         })
         .collect();
     c.fill_path(&Path::polyline(&island, true), &Brush::Solid(LAND));
-    c.stroke_path(&Path::polyline(&island, true), &Stroke::new(2.0), &Brush::Solid(Color::rgb(90, 110, 70)));
+    c.stroke_path(
+        &Path::polyline(&island, true),
+        &Stroke::new(2.0),
+        &Brush::Solid(Color::rgb(90, 110, 70)),
+    );
     let route = Path::polyline(
         &[
             vehicle,
@@ -151,13 +161,22 @@ pub fn sea_chart(c: &mut dyn Canvas, vehicle: Point, heading_deg: f32) {
     c.translate(vehicle.x, vehicle.y);
     c.rotate(heading_deg.to_radians());
     let boat = Path::polyline(
-        &[Point::new(0.0, -14.0), Point::new(9.0, 10.0), Point::new(0.0, 5.0), Point::new(-9.0, 10.0)],
+        &[
+            Point::new(0.0, -14.0),
+            Point::new(9.0, 10.0),
+            Point::new(0.0, 5.0),
+            Point::new(-9.0, 10.0),
+        ],
         true,
     );
     c.fill_path(&boat, &Brush::Solid(GOOD));
     c.stroke_path(&boat, &Stroke::new(1.5), &Brush::Solid(Color::BLACK));
     c.restore();
-    c.draw_text("USV1", Point::new(vehicle.x + 16.0, vehicle.y - 8.0), &TextStyle::new(13.0, TEXT).bold());
+    c.draw_text(
+        "USV1",
+        Point::new(vehicle.x + 16.0, vehicle.y - 8.0),
+        &TextStyle::new(13.0, TEXT).bold(),
+    );
 }
 
 /// A camera stand-in: horizon, sky and water gradients, a crosshair.
@@ -189,7 +208,11 @@ pub fn camera_view(c: &mut dyn Canvas, label: &str, tint: Color) {
     cross.move_to(Point::new(cx, cy - 2.0 * k)).line_to(Point::new(cx, cy - k / 2.0));
     cross.move_to(Point::new(cx, cy + k / 2.0)).line_to(Point::new(cx, cy + 2.0 * k));
     c.stroke_path(&cross.finish(), &Stroke::new(2.0), &Brush::Solid(GOOD));
-    c.draw_text(label, Point::new(10.0, 8.0), &TextStyle::new((s.h * 0.06).clamp(10.0, 20.0), TEXT).bold());
+    c.draw_text(
+        label,
+        Point::new(10.0, 8.0),
+        &TextStyle::new((s.h * 0.06).clamp(10.0, 20.0), TEXT).bold(),
+    );
 }
 
 /// The board the benchmark draws: `gauges` dials in a grid and `texts` text runs.

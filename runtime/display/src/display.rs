@@ -25,6 +25,12 @@ pub trait Compositor {
     fn composite(&mut self, layers: &[LayerView<'_>], damage: IRect);
     /// The frame as premultiplied RGBA8.
     fn read_frame(&mut self) -> Pixmap;
+    /// Shows the frame in an OS window, where the compositor has one.
+    fn present(&mut self) -> bool {
+        false
+    }
+    /// The OS window's new size (the display's own size does not change with it).
+    fn resize_surface(&mut self, _width: u32, _height: u32) {}
 }
 
 impl Compositor for CpuCompositor {
@@ -175,7 +181,9 @@ impl Display {
         let compositor: Box<dyn Compositor> = match options.backend {
             BackendChoice::Cpu => Box::new(cpu(w, h, options.background)?),
             #[cfg(feature = "gpu")]
-            BackendChoice::Gpu => Box::new(crate::gpu::GpuCompositor::headless(w, h, options.background)?),
+            BackendChoice::Gpu => {
+                Box::new(crate::gpu::GpuCompositor::headless(w, h, options.background)?)
+            }
             #[cfg(not(feature = "gpu"))]
             BackendChoice::Gpu => {
                 return Err(DisplayError::NoAdapter("built without the `gpu` feature".into()));
@@ -232,7 +240,8 @@ impl Display {
         let damage = stats.damage;
         {
             let views = self.wm.layer_views();
-            stats.composited = views.iter().filter(|v| !v.screen_rect().intersect(&damage).is_empty()).count();
+            stats.composited =
+                views.iter().filter(|v| !v.screen_rect().intersect(&damage).is_empty()).count();
             self.compositor.composite(&views, damage);
         }
         self.wm.composited();
@@ -242,7 +251,9 @@ impl Display {
         self.counters.layers_partial += stats.partial.len() as u64;
         self.counters.paint_failures += stats.failed.len() as u64;
         for (name, why) in &stats.failed {
-            eprintln!("mocu-display: window `{name}`: painter failed ({why}); its layer is skipped");
+            eprintln!(
+                "mocu-display: window `{name}`: painter failed ({why}); its layer is skipped"
+            );
         }
         let _ = self.ds.set(self.wm.display_object(), "frame", Value::Int(self.frame as i64));
         stats
@@ -325,6 +336,15 @@ impl Display {
         self.wm.pointer(x, y, ev)
     }
 
+    /// Shows the last frame in the OS window (windowed compositors only).
+    pub fn present(&mut self) -> bool {
+        self.compositor.present()
+    }
+
+    pub(crate) fn compositor_mut(&mut self) -> &mut dyn Compositor {
+        &mut *self.compositor
+    }
+
     /// The last frame, premultiplied RGBA8.
     pub fn read_frame(&mut self) -> Pixmap {
         self.compositor.read_frame()
@@ -333,7 +353,9 @@ impl Display {
     /// Writes the last frame as a PNG.
     pub fn screenshot(&mut self, path: &Path) -> Result<(), DisplayError> {
         let frame = self.read_frame();
-        frame.save_png(path).map_err(|e| DisplayError::Io(format!("writing {}: {e}", path.display())))
+        frame
+            .save_png(path)
+            .map_err(|e| DisplayError::Io(format!("writing {}: {e}", path.display())))
     }
 }
 

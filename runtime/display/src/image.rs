@@ -29,7 +29,8 @@ impl Image {
                 }
             }
         }
-        let pixmap = tiny_skia::Pixmap::from_vec(rgba, tiny_skia::IntSize::from_wh(width, height)?)?;
+        let pixmap =
+            tiny_skia::Pixmap::from_vec(rgba, tiny_skia::IntSize::from_wh(width, height)?)?;
         Some(Image { pixmap: Arc::new(pixmap) })
     }
 

@@ -24,6 +24,8 @@ mod paint;
 mod path;
 mod skia;
 mod text;
+#[cfg(feature = "gpu")]
+mod window;
 mod wm;
 
 pub use anim::{Animator, Clock, Easing};
@@ -39,14 +41,14 @@ pub use display::{
 };
 pub use geom::{IRect, Point, Rect, Size, Transform};
 #[cfg(feature = "gpu")]
-pub use gpu::{GpuCompositor, WindowOptions, run_window};
+pub use gpu::GpuCompositor;
 pub use image::Image;
-pub use paint::{
-    PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, with_canvas,
-};
+pub use paint::{PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, with_canvas};
 pub use path::{Path, PathBuilder, PathEl};
 pub use skia::SkiaCanvas;
 pub use text::{FAMILY, measure as measure_text};
+#[cfg(feature = "gpu")]
+pub use window::{WindowOptions, run_window};
 pub use wm::{FrameStats, Hit, PAINT_ERROR, WINDOW_TYPE, WinProps, WindowManager};
 
 /// Publishes a window object under `root.display` (what a compiled layout does): name,

@@ -1,8 +1,7 @@
 //! The tiny-skia (CPU) implementation of [`Canvas`].
 
 use crate::canvas::{
-    Baseline, Brush, Canvas, ImageFit, LineCap, LineJoin, Stroke, TextMetrics, TextStyle,
-    fit_rect,
+    Baseline, Brush, Canvas, ImageFit, LineCap, LineJoin, Stroke, TextMetrics, TextStyle, fit_rect,
 };
 use crate::color::Color;
 use crate::geom::{IRect, Point, Rect, Size, Transform};
@@ -110,12 +109,8 @@ impl SkiaCanvas {
         let (pw, _) = (self.pixmap.width() as usize, self.pixmap.height() as usize);
         let data = self.pixmap.data_mut();
         let a = color.a as u32;
-        let pre = [
-            div255(color.r as u32 * a),
-            div255(color.g as u32 * a),
-            div255(color.b as u32 * a),
-            a,
-        ];
+        let pre =
+            [div255(color.r as u32 * a), div255(color.g as u32 * a), div255(color.b as u32 * a), a];
         text::with_engine(|e| {
             for g in &run.glyphs {
                 let Some(img) = e.glyph(g.key) else { continue };
@@ -181,10 +176,8 @@ fn skia_paint(brush: &Brush) -> Option<Paint<'static>> {
     match brush {
         Brush::Solid(c) => paint.set_color(c.to_skia()),
         Brush::Linear { start, end, stops } => {
-            let stops = stops
-                .iter()
-                .map(|(o, c)| tiny_skia::GradientStop::new(*o, c.to_skia()))
-                .collect();
+            let stops =
+                stops.iter().map(|(o, c)| tiny_skia::GradientStop::new(*o, c.to_skia())).collect();
             paint.shader = tiny_skia::LinearGradient::new(
                 tiny_skia::Point::from_xy(start.x, start.y),
                 tiny_skia::Point::from_xy(end.x, end.y),
@@ -260,7 +253,9 @@ impl Canvas for SkiaCanvas {
         if clip.is_empty() {
             return;
         }
-        let c = tiny_skia::Color::from_rgba8(color.r, color.g, color.b, color.a).premultiply().to_color_u8();
+        let c = tiny_skia::Color::from_rgba8(color.r, color.g, color.b, color.a)
+            .premultiply()
+            .to_color_u8();
         let px = [c.red(), c.green(), c.blue(), c.alpha()];
         let w = self.pixmap.width() as usize;
         let data = self.pixmap.data_mut();
@@ -300,7 +295,8 @@ impl Canvas for SkiaCanvas {
         if shown.is_empty() || !self.visible(shown, 0.0) {
             return;
         }
-        let pattern_t = tiny_skia::Transform::from_row(r.w / img.w, 0.0, 0.0, r.h / img.h, r.x, r.y);
+        let pattern_t =
+            tiny_skia::Transform::from_row(r.w / img.w, 0.0, 0.0, r.h / img.h, r.x, r.y);
         let paint = Paint {
             shader: tiny_skia::Pattern::new(
                 image.pixmap.as_ref().as_ref(),
@@ -348,7 +344,8 @@ impl Canvas for SkiaCanvas {
             self.blit_text(&run, o.x.round() as i32, o.y.round() as i32, style.color);
         } else {
             // Rotated or skewed: rasterise the run upright, then draw it transformed.
-            let (pw, ph) = ((m.width.ceil() as u32).max(1) + 2, (m.height.ceil() as u32).max(1) + 2);
+            let (pw, ph) =
+                ((m.width.ceil() as u32).max(1) + 2, (m.height.ceil() as u32).max(1) + 2);
             let Some(tmp) = Pixmap::new(pw, ph) else { return metrics };
             let mut sub = SkiaCanvas::new(tmp, (0, 0), Size::new(pw as f32, ph as f32));
             sub.blit_text(&run, 1, 1, style.color);

@@ -13,8 +13,8 @@ use crate::geom::{IRect, Size};
 use crate::paint;
 use crate::skia::SkiaCanvas;
 use mocu_dataserver::{
-    CallOptions, CallOutcome, DataServer, DsError, Executor, Guid, Kind, MethodSpec,
-    Notification, ParamSpec, Subject, SubscriptionId, Topic, Value, ValueKind,
+    CallOptions, CallOutcome, DataServer, DsError, Executor, Guid, Kind, MethodSpec, Notification,
+    ParamSpec, Subject, SubscriptionId, Topic, Value, ValueKind,
 };
 use parking_lot::{Condvar, Mutex};
 use std::collections::HashMap;
@@ -355,7 +355,12 @@ impl WindowManager {
                 .windows
                 .iter_mut()
                 .map(|(g, e)| {
-                    (*g, e.props.clone(), std::mem::take(&mut e.repaint), std::mem::take(&mut e.damage))
+                    (
+                        *g,
+                        e.props.clone(),
+                        std::mem::take(&mut e.repaint),
+                        std::mem::take(&mut e.damage),
+                    )
                 })
                 .collect();
             let removed = std::mem::take(&mut st.removed);
@@ -392,7 +397,9 @@ impl WindowManager {
             self.index = kids.into_iter().enumerate().map(|(i, g)| (g, i)).collect();
         }
         let mut snaps = snaps;
-        snaps.sort_by_key(|(g, p, _, _)| (p.layer, p.order, self.index.get(g).copied().unwrap_or(usize::MAX), *g));
+        snaps.sort_by_key(|(g, p, _, _)| {
+            (p.layer, p.order, self.index.get(g).copied().unwrap_or(usize::MAX), *g)
+        });
         let stacking: Vec<Guid> = snaps.iter().map(|s| s.0).collect();
         if stacking != self.stacking {
             // Windows whose place in the stack changed are recomposited.
@@ -430,7 +437,9 @@ impl WindowManager {
             let layer = self.layers.get_mut(&g).expect("inserted above");
             layer.pos = (r.x, r.y);
             let shown = match &layer.pixmap {
-                Some(pm) if visible && layer.failed.is_none() && !layer.unclaimed && !layer.stale => {
+                Some(pm)
+                    if visible && layer.failed.is_none() && !layer.unclaimed && !layer.stale =>
+                {
                     IRect::new(
                         r.x + layer.origin.0,
                         r.y + layer.origin.1,
@@ -534,7 +543,12 @@ impl WindowManager {
             }
             Some(d) => {
                 let Some(pm) = &layer.pixmap else { return };
-                let extent = IRect::new(layer.origin.0, layer.origin.1, pm.width() as i32, pm.height() as i32);
+                let extent = IRect::new(
+                    layer.origin.0,
+                    layer.origin.1,
+                    pm.width() as i32,
+                    pm.height() as i32,
+                );
                 let d = d.intersect(&extent);
                 if d.is_empty() {
                     layer.damage = IRect::default();
@@ -548,7 +562,8 @@ impl WindowManager {
         paint::install(canvas);
         let outcome = Arc::new(Mutex::new(None));
         let o2 = outcome.clone();
-        let args = vec![Value::Int(frame as i64), Value::Float(r.w as f64), Value::Float(r.h as f64)];
+        let args =
+            vec![Value::Int(frame as i64), Value::Float(r.w as f64), Value::Float(r.h as f64)];
         self.ds.call(g, "paint", args, Some(CallOptions::immediate()), move |o| {
             *o2.lock() = Some(o);
         });
@@ -682,8 +697,12 @@ impl WindowManager {
     }
 
     fn send(&self, g: Guid, kind: &str, button: i64, x: f32, y: f32) {
-        let args =
-            vec![Value::str(kind), Value::Int(button), Value::Float(x as f64), Value::Float(y as f64)];
+        let args = vec![
+            Value::str(kind),
+            Value::Int(button),
+            Value::Float(x as f64),
+            Value::Float(y as f64),
+        ];
         self.ds.call(g, "pointer", args, None, |_| {});
     }
 }
@@ -705,8 +724,12 @@ impl Drop for WindowManager {
 
 /// Copies `src` over `dst` at (x, y), replacing pixels (no blending).
 fn copy_into(dst: &mut Pixmap, src: &Pixmap, x: i32, y: i32) {
-    let r = IRect::new(x, y, src.width() as i32, src.height() as i32)
-        .intersect(&IRect::new(0, 0, dst.width() as i32, dst.height() as i32));
+    let r = IRect::new(x, y, src.width() as i32, src.height() as i32).intersect(&IRect::new(
+        0,
+        0,
+        dst.width() as i32,
+        dst.height() as i32,
+    ));
     if r.is_empty() {
         return;
     }
@@ -753,7 +776,10 @@ fn on_child(
             }
             {
                 let mut st = sh.state.lock();
-                st.windows.insert(guid, WinEntry { props, sub: None, repaint: true, damage: IRect::default() });
+                st.windows.insert(
+                    guid,
+                    WinEntry { props, sub: None, repaint: true, damage: IRect::default() },
+                );
                 st.reindex = true;
                 sh.changed(&mut st);
             }
@@ -835,7 +861,11 @@ fn publish_invalidate(ds: &DataServer, window: Guid, sh: &Arc<Shared>) {
 
 /// `swap(a, b, ms)`, `animate(window, x, y, w, h, ms)` and
 /// `animate_eased(window, x, y, w, h, ms, easing)` on `root.display`.
-fn publish_wm_methods(ds: &DataServer, display: Guid, animator: &Arc<Animator>) -> Result<(), DsError> {
+fn publish_wm_methods(
+    ds: &DataServer,
+    display: Guid,
+    animator: &Arc<Animator>,
+) -> Result<(), DsError> {
     let find = {
         let ds = ds.clone();
         move |name: &str| -> Option<Guid> {
@@ -854,7 +884,8 @@ fn publish_wm_methods(ds: &DataServer, display: Guid, animator: &Arc<Animator>) 
             .defaults(CallOptions::immediate())
             .describe("Exchanges two windows' rectangles, animated with ease-in-out"),
         move |a| {
-            let (Some(x), Some(y)) = (a[0].as_str().and_then(&f2), a[1].as_str().and_then(&f2)) else {
+            let (Some(x), Some(y)) = (a[0].as_str().and_then(&f2), a[1].as_str().and_then(&f2))
+            else {
                 return CallOutcome::Refused("no such window".into());
             };
             let ms = a[2].as_i64().unwrap_or(0).max(0) as u64;
@@ -874,27 +905,32 @@ fn publish_wm_methods(ds: &DataServer, display: Guid, animator: &Arc<Animator>) 
     for eased in [false, true] {
         let an = animator.clone();
         let f3 = find.clone();
-        let mut spec = rect_params(MethodSpec::new(if eased { "animate_eased" } else { "animate" }));
+        let mut spec =
+            rect_params(MethodSpec::new(if eased { "animate_eased" } else { "animate" }));
         if eased {
             spec = spec.param(ParamSpec::new("easing", ValueKind::String));
         }
-        ds.publish_method_fn(display, spec.describe("Moves/resizes a window, animated"), move |a| {
-            let Some(w) = a[0].as_str().and_then(&f3) else {
-                return CallOutcome::Refused("no such window".into());
-            };
-            let easing = if eased {
-                match a[6].as_str().and_then(Easing::parse) {
-                    Some(e) => e,
-                    None => return CallOutcome::Refused("unknown easing".into()),
-                }
-            } else {
-                Easing::EaseInOut
-            };
-            let to = [arg_f(&a[1]), arg_f(&a[2]), arg_f(&a[3]), arg_f(&a[4])];
-            let ms = a[5].as_i64().unwrap_or(0).max(0) as u64;
-            an.start(w, to, Duration::from_millis(ms), easing);
-            CallOutcome::Accepted(vec![])
-        })?;
+        ds.publish_method_fn(
+            display,
+            spec.describe("Moves/resizes a window, animated"),
+            move |a| {
+                let Some(w) = a[0].as_str().and_then(&f3) else {
+                    return CallOutcome::Refused("no such window".into());
+                };
+                let easing = if eased {
+                    match a[6].as_str().and_then(Easing::parse) {
+                        Some(e) => e,
+                        None => return CallOutcome::Refused("unknown easing".into()),
+                    }
+                } else {
+                    Easing::EaseInOut
+                };
+                let to = [arg_f(&a[1]), arg_f(&a[2]), arg_f(&a[3]), arg_f(&a[4])];
+                let ms = a[5].as_i64().unwrap_or(0).max(0) as u64;
+                an.start(w, to, Duration::from_millis(ms), easing);
+                CallOutcome::Accepted(vec![])
+            },
+        )?;
     }
     Ok(())
 }

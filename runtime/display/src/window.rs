@@ -1,0 +1,242 @@
+//! A real OS window (winit) showing a display through the wgpu compositor: what
+//! `mocu run` uses where there is a display server.
+
+use crate::display::{Counters, Display, DisplayError, DisplayOptions, PointerEvent};
+use crate::gpu::GpuCompositor;
+use mocu_dataserver::DataServer;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use winit::application::ApplicationHandler;
+use winit::event::{ElementState, MouseButton, StartCause, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::window::{Window, WindowId};
+
+/// How [`run_window`] runs.
+#[derive(Clone, Debug)]
+pub struct WindowOptions {
+    pub title: String,
+    pub display: DisplayOptions,
+    /// Stop after this many frame ticks at the display rate (`--frames N`); `None` runs
+    /// until the window is closed, drawing only when something changes.
+    pub frames: Option<u64>,
+    /// Write the last frame here before returning (`--screenshot`).
+    pub screenshot: Option<PathBuf>,
+}
+
+/// Wakes the event loop: the world model changed what the display shows.
+#[derive(Debug, Clone, Copy)]
+struct Wake;
+
+struct App<'a> {
+    ds: DataServer,
+    opts: WindowOptions,
+    setup: Option<Box<dyn FnOnce(&mut Display) + 'a>>,
+    proxy: EventLoopProxy<Wake>,
+    window: Option<Arc<Window>>,
+    display: Option<Display>,
+    ticks: u64,
+    next: Instant,
+    result: Result<Counters, DisplayError>,
+    cursor: (f32, f32),
+}
+
+impl App<'_> {
+    fn start(&mut self, el: &ActiveEventLoop) -> Result<(), DisplayError> {
+        let d = &self.opts.display;
+        let attrs = Window::default_attributes()
+            .with_title(self.opts.title.clone())
+            .with_inner_size(winit::dpi::PhysicalSize::new(d.width, d.height))
+            .with_resizable(true);
+        let window =
+            Arc::new(el.create_window(attrs).map_err(|e| DisplayError::Window(e.to_string()))?);
+        let instance = wgpu::Instance::new(
+            wgpu::InstanceDescriptor::new_with_display_handle(Box::new(el.owned_display_handle()))
+                .with_env(),
+        );
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| DisplayError::Window(e.to_string()))?;
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            apply_limit_buckets: false,
+            compatible_surface: Some(&surface),
+        }))
+        .map_err(|e| DisplayError::NoAdapter(e.to_string()))?;
+        let size = window.inner_size();
+        let comp = GpuCompositor::for_window(
+            &adapter,
+            surface,
+            d.width,
+            d.height,
+            size.width,
+            size.height,
+            d.background,
+        )?;
+        eprintln!(
+            "mocu-display: window {}x{} on {}",
+            d.width,
+            d.height,
+            crate::display::Compositor::name(&comp)
+        );
+        let mut display = Display::with_compositor(&self.ds, d.clone(), Box::new(comp))?;
+        if let Some(setup) = self.setup.take() {
+            setup(&mut display);
+        }
+        // Idle: sleep until the world model changes, then wake the loop (no polling).
+        let waiter = display.change_waiter();
+        let proxy = self.proxy.clone();
+        let period = Duration::from_secs_f64(1.0 / d.rate.max(1.0));
+        std::thread::Builder::new()
+            .name("display-waker".into())
+            .spawn(move || {
+                loop {
+                    if waiter.wait(Duration::from_secs(1)) {
+                        if proxy.send_event(Wake).is_err() {
+                            return;
+                        }
+                        std::thread::sleep(period);
+                    }
+                }
+            })
+            .map_err(|e| DisplayError::Window(e.to_string()))?;
+        self.window = Some(window.clone());
+        self.display = Some(display);
+        self.next = Instant::now();
+        window.request_redraw();
+        Ok(())
+    }
+
+    fn fail(&mut self, el: &ActiveEventLoop, e: DisplayError) {
+        self.result = Err(e);
+        el.exit();
+    }
+
+    fn draw(&mut self, el: &ActiveEventLoop) {
+        let Some(display) = &mut self.display else { return };
+        let st = display.frame();
+        if st.drawn {
+            display.present();
+        }
+        self.ticks += 1;
+        if let Some(n) = self.opts.frames
+            && self.ticks >= n
+        {
+            if let Some(path) = &self.opts.screenshot
+                && let Err(e) = display.screenshot(path)
+            {
+                self.result = Err(e);
+                el.exit();
+                return;
+            }
+            self.result = Ok(display.counters());
+            el.exit();
+        }
+    }
+}
+
+impl ApplicationHandler<Wake> for App<'_> {
+    fn resumed(&mut self, el: &ActiveEventLoop) {
+        if self.window.is_none()
+            && let Err(e) = self.start(el)
+        {
+            self.fail(el, e);
+        }
+    }
+
+    fn new_events(&mut self, el: &ActiveEventLoop, cause: StartCause) {
+        if self.opts.frames.is_some() && matches!(cause, StartCause::ResumeTimeReached { .. }) {
+            self.draw(el);
+        }
+        if self.opts.frames.is_some() {
+            let period = Duration::from_secs_f64(1.0 / self.opts.display.rate.max(1.0));
+            let now = Instant::now();
+            while self.next <= now {
+                self.next += period;
+            }
+            el.set_control_flow(ControlFlow::WaitUntil(self.next));
+        } else {
+            el.set_control_flow(ControlFlow::Wait);
+        }
+    }
+
+    fn user_event(&mut self, el: &ActiveEventLoop, _: Wake) {
+        if self.opts.frames.is_none() {
+            self.draw(el);
+        }
+    }
+
+    fn window_event(&mut self, el: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+        let Some(display) = &mut self.display else { return };
+        match event {
+            WindowEvent::CloseRequested => {
+                self.result = Ok(display.counters());
+                el.exit();
+            }
+            WindowEvent::Resized(s) => {
+                display.compositor_mut().resize_surface(s.width, s.height);
+                display.present();
+            }
+            WindowEvent::RedrawRequested => {
+                // Exposed or first shown: show the last frame again.
+                if display.frame_number() == 0 {
+                    self.draw(el);
+                } else {
+                    display.present();
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                self.cursor = (position.x as f32, position.y as f32);
+                display.pointer(self.cursor.0, self.cursor.1, PointerEvent::Move);
+            }
+            WindowEvent::CursorLeft { .. } => {
+                display.pointer(self.cursor.0, self.cursor.1, PointerEvent::Leave);
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let b = match button {
+                    MouseButton::Left => 0,
+                    MouseButton::Right => 1,
+                    MouseButton::Middle => 2,
+                    _ => return,
+                };
+                let ev = match state {
+                    ElementState::Pressed => PointerEvent::Down(b),
+                    ElementState::Released => PointerEvent::Up(b),
+                };
+                display.pointer(self.cursor.0, self.cursor.1, ev);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Opens an OS window and runs the display in it until closed (or for `frames` ticks).
+/// `setup` runs once the display exists (publish windows, claim them...).
+///
+/// Errors: `Window` when there is no display server (no `DISPLAY`), `NoAdapter` when wgpu
+/// finds no adapter for the window. `mocu run` then falls back to the headless CPU path.
+pub fn run_window<'a>(
+    ds: &DataServer,
+    opts: WindowOptions,
+    setup: impl FnOnce(&mut Display) + 'a,
+) -> Result<Counters, DisplayError> {
+    let el = EventLoop::<Wake>::with_user_event()
+        .build()
+        .map_err(|e| DisplayError::Window(e.to_string()))?;
+    let proxy = el.create_proxy();
+    let mut app = App {
+        ds: ds.clone(),
+        opts,
+        setup: Some(Box::new(setup)),
+        proxy,
+        window: None,
+        display: None,
+        ticks: 0,
+        next: Instant::now(),
+        result: Err(DisplayError::Window("the event loop ended before the window opened".into())),
+        cursor: (0.0, 0.0),
+    };
+    el.run_app(&mut app).map_err(|e| DisplayError::Window(e.to_string()))?;
+    app.result
+}
