@@ -336,6 +336,12 @@ impl Display {
         self.wm.pointer(x, y, ev)
     }
 
+    /// Marks every layer for a full repaint at the next frame (a backend change, a
+    /// benchmark's full frame).
+    pub fn invalidate_all(&mut self) {
+        self.wm.invalidate_all();
+    }
+
     /// Shows the last frame in the OS window (windowed compositors only).
     pub fn present(&mut self) -> bool {
         self.compositor.present()

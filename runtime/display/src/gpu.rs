@@ -43,14 +43,27 @@ fn vs_blit(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
 
 @group(0) @binding(1) var frame: texture_2d<f32>;
 
-@fragment
-fn fs_blit(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
+fn frame_texel(pos: vec4<f32>) -> vec4<f32> {
     let size = vec2<i32>(textureDimensions(frame));
     let p = vec2<i32>(floor(pos.xy));
     if (p.x >= size.x || p.y >= size.y) {
         return vec4<f32>(0.0, 0.0, 0.0, 1.0);
     }
     return textureLoad(frame, p, 0);
+}
+
+@fragment
+fn fs_blit(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
+    return frame_texel(pos);
+}
+
+// For an sRGB-only surface: decode, so that the hardware's encode gives back our values.
+@fragment
+fn fs_blit_decode(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
+    let c = frame_texel(pos);
+    let lo = c.rgb / 12.92;
+    let hi = pow((c.rgb + 0.055) / 1.055, vec3<f32>(2.4));
+    return vec4<f32>(select(hi, lo, c.rgb <= vec3<f32>(0.04045)), c.a);
 }
 "#;
 
@@ -335,9 +348,22 @@ impl GpuCompositor {
         let mut config = surface
             .get_default_config(adapter, w, h)
             .ok_or_else(|| DisplayError::Window("the surface does not suit the adapter".into()))?;
-        // Frame values are sRGB-encoded already: write them through a non-sRGB view.
-        let view_format = config.format.remove_srgb_suffix();
-        config.view_formats = vec![view_format];
+        // Frame values are sRGB-encoded already. Prefer a non-sRGB surface format; else
+        // a non-sRGB view of the sRGB surface; else decode in the blit shader.
+        let caps = surface.get_capabilities(adapter);
+        let mut fs = "fs_blit";
+        if let Some(f) = caps.formats.iter().find(|f| !f.is_srgb()) {
+            config.format = *f;
+        } else if adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::SURFACE_VIEW_FORMATS)
+        {
+            config.view_formats = vec![config.format.remove_srgb_suffix()];
+        } else {
+            fs = "fs_blit_decode";
+        }
+        let view_format = config.view_formats.first().copied().unwrap_or(config.format);
         config.present_mode = wgpu::PresentMode::AutoVsync;
         surface.configure(&self.device, &config);
         let blit = make_pipeline(
@@ -345,7 +371,7 @@ impl GpuCompositor {
             &self.shader,
             &self.layout,
             "vs_blit",
-            "fs_blit",
+            fs,
             view_format,
             false,
         );
