@@ -1,0 +1,106 @@
+//! The layered display's frame cost on tiny-skia (issue 5): a full 1920x1080 frame with
+//! 20 gauges and 200 text runs against a memcpy of the frame in the same run, and a frame
+//! in which one gauge changed (damage repaint + partial recomposite).
+//!
+//! `cargo bench --bench frame`. Targets: full frame <= 8 ms median on a 2-core machine;
+//! one gauge changed <= 10% of the full frame.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use mocu_dataserver::{Config, DataServer, Value};
+use mocu_display::demo;
+use mocu_display::*;
+use parking_lot::Mutex;
+use std::hint::black_box;
+use std::sync::Arc;
+
+const W: u32 = 1920;
+const H: u32 = 1080;
+
+struct Scene {
+    _ds: DataServer,
+    display: Display,
+    hud: mocu_dataserver::Guid,
+    values: Arc<Mutex<Vec<f32>>>,
+}
+
+fn scene() -> Scene {
+    let ds = DataServer::new(Config { workers: 2 });
+    let mut display = Display::new(&ds, DisplayOptions::new(W, H)).unwrap();
+    let disp = display.display_object();
+    let full = Rect::new(0.0, 0.0, W as f32, H as f32);
+    let map = publish_window(&ds, disp, "map", "map", 0, full).unwrap();
+    let hud = publish_window(&ds, disp, "hud", "widgets", 10, full).unwrap();
+    ds.set(hud, "opacity", Value::Float(0.95)).unwrap();
+    claim_window(&ds, map, |c, _| demo::sea_chart(c, Point::new(600.0, 700.0), 30.0)).unwrap();
+    let values = Arc::new(Mutex::new((0..20).map(|i| i as f32 * 4.0).collect::<Vec<_>>()));
+    let v2 = values.clone();
+    claim_window(&ds, hud, move |c, _| demo::gauge_board(c, &v2.lock(), 200)).unwrap();
+    ds.quiesce();
+    let st = display.frame();
+    assert!(st.drawn);
+    Scene { _ds: ds, display, hud, values }
+}
+
+fn bench(c: &mut Criterion) {
+    let mut g = c.benchmark_group("frame_1920x1080");
+    g.sample_size(40);
+
+    // Reference: copying the 8.3 MB frame once.
+    let src = vec![7u8; (W * H * 4) as usize];
+    let mut dst = vec![0u8; (W * H * 4) as usize];
+    g.bench_function("memcpy_8MB", |b| {
+        b.iter(|| {
+            dst.copy_from_slice(black_box(&src));
+            black_box(&dst);
+        })
+    });
+
+    // Everything repainted: the chart and the HUD (20 gauges, 200 text runs), then the
+    // whole frame composited.
+    let mut s = scene();
+    g.bench_function("full_frame", |b| {
+        b.iter(|| {
+            s.display.invalidate_all();
+            let st = s.display.frame();
+            assert_eq!(st.repainted.len(), 2);
+            black_box(st.damage)
+        })
+    });
+
+    // Only the HUD layer repainted (the chart is unchanged), whole frame composited.
+    let ds = s._ds.clone();
+    g.bench_function("hud_layer_repaint", |b| {
+        b.iter(|| {
+            invalidate(&ds, s.hud).unwrap();
+            ds.quiesce();
+            let st = s.display.frame();
+            black_box(st.damage)
+        })
+    });
+
+    // One gauge changed: its rectangle repainted and recomposited.
+    let mut k = 0u32;
+    g.bench_function("one_gauge_changed", |b| {
+        b.iter(|| {
+            k += 1;
+            s.values.lock()[7] = (k % 100) as f32;
+            let ctr = demo::gauge_center(7, W as f32);
+            invalidate_rect(&ds, s.hud, Rect::new(ctr.x - 92.0, ctr.y - 92.0, 184.0, 184.0)).unwrap();
+            let st = s.display.frame();
+            assert_eq!(st.partial.len(), 1);
+            black_box(st.damage)
+        })
+    });
+
+    // Nothing changed: the frame is skipped.
+    g.bench_function("nothing_changed", |b| {
+        b.iter(|| {
+            let st = s.display.frame();
+            assert!(!st.drawn);
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
