@@ -1,0 +1,345 @@
+//! Actions (`set`, `call`, `swap`, `show`, `hide`, `alert`) and their control feedback.
+//!
+//! Every call shows pending, then its outcome, on the control that issued it (`feedback`
+//! and `feedback_reason` properties of the widget), in `root.operator.feedback`, and in
+//! the event log. A refused write is feedback, never a crash.
+
+use crate::graph::{Builder, Shared, State, eval_once, path_text, resolve};
+use crate::lower::{Base, LowerError, Lowerer, Scope, value_ty};
+use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
+use mocu_jit as jit;
+use mocu_language::program::Action;
+use mocu_value::{Guid, Value, ValueKind};
+use std::sync::Arc;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+#[derive(Clone, Debug)]
+pub(crate) enum CompiledAction {
+    Set { base: Base, objects: Vec<String>, property: String, func: usize },
+    Call { base: Base, objects: Vec<String>, method: String, func: usize },
+    Swap { a: String, b: String, ms: f64 },
+    Show(String),
+    Hide(String),
+    Alert { level: String, func: usize },
+}
+
+pub(crate) fn compile_actions(
+    b: &mut Builder,
+    actions: &[Action],
+    screen: (f64, f64),
+) -> Result<Vec<CompiledAction>, LowerError> {
+    let mut out = Vec::new();
+    for a in actions {
+        out.push(match a {
+            Action::Set { target, value, .. } => {
+                let mut lw = Lowerer::new(Scope::Plain, screen);
+                let (base, mut objects) = lw.path_names(target)?;
+                let property = objects
+                    .pop()
+                    .ok_or_else(|| LowerError(format!("`set {target}` names no property")))?;
+                let ty = value_ty(&value.expr.ty).unwrap_or(jit::Ty::Num);
+                let e = lw.lower(&value.expr, ty)?;
+                CompiledAction::Set { base, objects, property, func: b.add(lw, vec![e]) }
+            }
+            Action::Call { target, args, .. } => {
+                let mut lw = Lowerer::new(Scope::Plain, screen);
+                let (base, mut objects) = lw.path_names(target)?;
+                let method = objects
+                    .pop()
+                    .ok_or_else(|| LowerError(format!("`call {target}` names no method")))?;
+                let mut outs = Vec::new();
+                for a in args {
+                    let ty = value_ty(&a.expr.ty).unwrap_or(jit::Ty::Num);
+                    outs.push(lw.lower(&a.expr, ty)?);
+                }
+                CompiledAction::Call { base, objects, method, func: b.add(lw, outs) }
+            }
+            Action::Swap { a, b: w, duration_ms, .. } => {
+                CompiledAction::Swap { a: a.clone(), b: w.clone(), ms: *duration_ms }
+            }
+            Action::Show { window, .. } => CompiledAction::Show(window.clone()),
+            Action::Hide { window, .. } => CompiledAction::Hide(window.clone()),
+            Action::Alert { level, message, .. } => {
+                let mut lw = Lowerer::new(Scope::Plain, screen);
+                let e = lw.lower(&message.expr, jit::Ty::Str)?;
+                CompiledAction::Alert { level: level.clone(), func: b.add(lw, vec![e]) }
+            }
+        });
+    }
+    Ok(out)
+}
+
+/// Who or what triggered actions.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct ActionCtx {
+    pub(crate) instance_object: Option<Guid>,
+    pub(crate) self_obj: Option<Guid>,
+    pub(crate) input: Option<f64>,
+    /// The widget that issued them (its feedback properties show the outcome).
+    pub(crate) origin: Option<Guid>,
+}
+
+fn now() -> f64 {
+    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// `root.operator.<name>`, created when first needed.
+pub(crate) fn operator_child(sh: &Shared, name: &str, kind: &str) -> Option<Guid> {
+    let op = crate::graph::ensure_object(&sh.ds, Guid::ROOT, "operator", "operator").ok()?;
+    crate::graph::ensure_object(&sh.ds, op, name, kind).ok()
+}
+
+/// Shows a call's state on the issuing control and in `root.operator.feedback`.
+fn feedback(sh: &Shared, origin: Option<Guid>, target: &str, state: &str, reason: &str) {
+    let ds = &sh.ds;
+    if let Some(w) = origin {
+        let _ = ds.set(w, "feedback", Value::str(state));
+        let _ = ds.set(w, "feedback_reason", Value::str(reason));
+    }
+    if let Some(f) = operator_child(sh, "feedback", "feedback") {
+        let _ = ds.set(f, "target", Value::str(target));
+        let _ = ds.set(f, "state", Value::str(state));
+        let _ = ds.set(f, "reason", Value::str(reason));
+        let _ = ds.set(f, "time", Value::Float(now()));
+    }
+}
+
+/// Runs actions now, on the calling thread; returns the alert objects it raised.
+pub(crate) fn run_actions(
+    sh: &Arc<Shared>,
+    actions: &[CompiledAction],
+    cx: ActionCtx,
+) -> Vec<Guid> {
+    let mut alerts = Vec::new();
+    for a in actions {
+        match a {
+            CompiledAction::Set { base, objects, property, func } => {
+                let value =
+                    eval_once(sh, *func, cx.instance_object, cx.self_obj, cx.input).remove(0);
+                let text = format!("{}.{property}", target_text(sh, base, objects, cx));
+                let outcome =
+                    match (start(base, cx).and_then(|s| resolve(&sh.ds, s, objects)), &value) {
+                        (_, None) => Err("the value is absent (no data)".to_string()),
+                        (None, _) => Err(format!(
+                            "`{}` does not exist (yet)",
+                            target_text(sh, base, objects, cx)
+                        )),
+                        (Some(obj), Some(v)) => {
+                            sh.ds.set(obj, property.as_str(), v.clone()).map_err(|e| e.to_string())
+                        }
+                    };
+                let v = value.unwrap_or(Value::str("absent"));
+                sh.sink.record(
+                    "action",
+                    &[("kind", Value::str("set")), ("target", Value::str(&text)), ("value", v)],
+                );
+                if let Err(why) = outcome {
+                    feedback(sh, cx.origin, &text, "refused", &why);
+                    sh.sink.record(
+                        "feedback",
+                        &[
+                            ("target", Value::str(&text)),
+                            ("outcome", Value::str("refused")),
+                            ("reason", Value::str(&why)),
+                        ],
+                    );
+                }
+            }
+            CompiledAction::Call { base, objects, method, func } => {
+                let args = eval_once(sh, *func, cx.instance_object, cx.self_obj, cx.input);
+                let text = format!("{}.{method}", target_text(sh, base, objects, cx));
+                sh.sink.record(
+                    "action",
+                    &[("kind", Value::str("call")), ("target", Value::str(&text))],
+                );
+                let obj = start(base, cx).and_then(|s| resolve(&sh.ds, s, objects));
+                let absent = args.iter().position(|a| a.is_none());
+                let (Some(obj), None) = (obj, absent) else {
+                    let why = match absent {
+                        Some(i) => format!("argument {} is absent (no data)", i + 1),
+                        None => {
+                            format!("`{}` does not exist (yet)", target_text(sh, base, objects, cx))
+                        }
+                    };
+                    feedback(sh, cx.origin, &text, "failed", &why);
+                    sh.sink.record(
+                        "feedback",
+                        &[
+                            ("target", Value::str(&text)),
+                            ("outcome", Value::str("failed")),
+                            ("reason", Value::str(&why)),
+                        ],
+                    );
+                    continue;
+                };
+                let args: Vec<Value> = args.into_iter().flatten().collect();
+                sh.sink.record(
+                    "call",
+                    &[("target", Value::str(&text)), ("args", Value::list(args.clone()))],
+                );
+                feedback(sh, cx.origin, &text, "pending", "");
+                let weak = Arc::downgrade(sh);
+                let origin = cx.origin;
+                sh.ds.call(obj, method.as_str(), args, None, move |outcome: CallOutcome| {
+                    let Some(sh) = weak.upgrade() else { return };
+                    let reason = match &outcome {
+                        CallOutcome::Refused(r) | CallOutcome::Failed(r) => r.clone(),
+                        CallOutcome::Accepted(_) => String::new(),
+                        other => other.to_string(),
+                    };
+                    feedback(&sh, origin, &text, outcome.label(), &reason);
+                    sh.sink.record(
+                        "feedback",
+                        &[
+                            ("target", Value::str(&text)),
+                            ("outcome", Value::str(outcome.label())),
+                            ("reason", Value::str(&reason)),
+                        ],
+                    );
+                });
+            }
+            CompiledAction::Swap { a, b, ms } => {
+                sh.sink.record(
+                    "action",
+                    &[("kind", Value::str("swap")), ("a", Value::str(a)), ("b", Value::str(b))],
+                );
+                swap(sh, a, b, *ms);
+            }
+            CompiledAction::Show(w) | CompiledAction::Hide(w) => {
+                let show = matches!(a, CompiledAction::Show(_));
+                let g = sh.state.lock().windows.get(w).copied();
+                if let Some(g) = g {
+                    let _ = sh.ds.set(g, "visible", Value::Bool(show));
+                }
+                let kind = if show { "show" } else { "hide" };
+                sh.sink.record("action", &[("kind", Value::str(kind)), ("window", Value::str(w))]);
+            }
+            CompiledAction::Alert { level, func } => {
+                let text = eval_once(sh, *func, cx.instance_object, cx.self_obj, cx.input)
+                    .remove(0)
+                    .unwrap_or(Value::str("(no data)"));
+                if let Some(g) = raise_alert(sh, level, &text.to_string()) {
+                    alerts.push(g);
+                }
+            }
+        }
+    }
+    alerts
+}
+
+fn start(base: &Base, cx: ActionCtx) -> Option<Guid> {
+    match base {
+        Base::Root => Some(Guid::ROOT),
+        Base::Var(_) => cx.instance_object,
+        Base::SelfObject => cx.self_obj,
+    }
+}
+
+fn target_text(sh: &Shared, base: &Base, objects: &[String], cx: ActionCtx) -> String {
+    let head = match start(base, cx) {
+        Some(g) => path_text(&sh.ds, g),
+        None => "self".into(),
+    };
+    if objects.is_empty() { head } else { format!("{head}.{}", objects.join(".")) }
+}
+
+/// Exchanges two windows' places: animated by the window manager's `swap` method when one
+/// is published on `root.display`, else at once.
+fn swap(sh: &Arc<Shared>, a: &str, b: &str, ms: f64) {
+    let (display, ga, gb) = {
+        let st = sh.state.lock();
+        (st.display, st.windows.get(a).copied(), st.windows.get(b).copied())
+    };
+    let args = vec![Value::str(a), Value::str(b), Value::Int(ms as i64)];
+    let out =
+        sh.ds.call_wait(display, "swap", args, Some(mocu_dataserver::CallOptions::immediate()));
+    if out != CallOutcome::NoSuchMethod {
+        return;
+    }
+    let (Some(ga), Some(gb)) = (ga, gb) else { return };
+    for p in ["x", "y", "w", "h"] {
+        let (va, vb) = (sh.ds.try_get(ga, p.into()), sh.ds.try_get(gb, p.into()));
+        if let (Some(va), Some(vb)) = (va, vb) {
+            let _ = sh.ds.set(ga, p, vb);
+            let _ = sh.ds.set(gb, p, va);
+        }
+    }
+}
+
+/// Publishes an alert under `root.operator.alerts` (severity, text, time, acknowledged,
+/// active) with an `acknowledge` method.
+pub(crate) fn raise_alert(sh: &Arc<Shared>, level: &str, text: &str) -> Option<Guid> {
+    let alerts = operator_child(sh, "alerts", "alerts")?;
+    let n = sh.ds.children(alerts).map_or(0, |c| c.len());
+    let g = sh
+        .ds
+        .create_object(alerts, ObjectInfo::new(&format!("alert{}", n + 1), "alert").subtype(level))
+        .ok()?;
+    let ds = &sh.ds;
+    let _ = ds.set(g, "severity", Value::str(level));
+    let _ = ds.set(g, "text", Value::str(text));
+    let _ = ds.set(g, "time", Value::Float(now()));
+    let _ = ds.set(g, "acknowledged", Value::Bool(false));
+    let _ = ds.set(g, "active", Value::Bool(true));
+    let ds2 = ds.clone();
+    let _ = ds.publish_method_fn(g, MethodSpec::new("acknowledge"), move |_| {
+        let _ = ds2.set(g, "acknowledged", Value::Bool(true));
+        CallOutcome::Accepted(vec![])
+    });
+    sh.sink.record("alert", &[("severity", Value::str(level)), ("text", Value::str(text))]);
+    Some(g)
+}
+
+/// Publishes each widget event (`press`, …) as a method of the widget object: whoever
+/// handles the mouse calls `widget.press()`, knowing nothing of the layout.
+pub(crate) fn publish_handlers(
+    sh: &Arc<Shared>,
+    widget: Guid,
+    handlers: &[(String, Vec<CompiledAction>)],
+    instance_object: Option<Guid>,
+) {
+    for (event, acts) in handlers {
+        let weak = Arc::downgrade(sh);
+        let acts = acts.clone();
+        let _ = sh.ds.publish_method_fn(widget, MethodSpec::new(event), move |_| {
+            let Some(sh) = weak.upgrade() else {
+                return CallOutcome::Failed("the layout was unloaded".into());
+            };
+            let cx = ActionCtx { instance_object, origin: Some(widget), ..ActionCtx::default() };
+            run_actions(&sh, &acts, cx);
+            CallOutcome::Accepted(vec![])
+        });
+    }
+}
+
+/// Publishes the layout's input bindings as methods of `root.display.bindings`, named
+/// `device.kind.input` (`gamepad.axis.left_y`), taking the input's value: the input module
+/// calls them.
+pub(crate) fn publish_bindings(sh: &Arc<Shared>, st: &mut State) {
+    if st.bindings.is_empty() {
+        return;
+    }
+    let Ok(obj) = crate::graph::ensure_object(&sh.ds, st.display, "bindings", "bindings") else {
+        return;
+    };
+    for (name, acts) in &st.bindings {
+        let weak = Arc::downgrade(sh);
+        let acts = acts.clone();
+        let spec = MethodSpec::new(name).param(ParamSpec::new("value", ValueKind::Float));
+        let _ = sh.ds.publish_method_fn(obj, spec, move |args| {
+            let Some(sh) = weak.upgrade() else {
+                return CallOutcome::Failed("the layout was unloaded".into());
+            };
+            let cx = ActionCtx { input: args[0].as_f64(), ..ActionCtx::default() };
+            run_actions(&sh, &acts, cx);
+            CallOutcome::Accepted(vec![])
+        });
+    }
+    st.owned_push(obj);
+}
+
+impl State {
+    pub(crate) fn owned_push(&mut self, g: Guid) {
+        self.owned_objects().push(g);
+    }
+}

@@ -1,0 +1,22 @@
+//! Live layouts: a checked [`Program`](mocu_language::Program) bound to the DataServer.
+//!
+//! - [`lower`]: typed expressions → the JIT's IR; each dotted path becomes an input slot.
+//! - [`graph`]: functions compiled together (Cranelift), cells binding them to shared path
+//!   subscriptions, evaluated once per tick with early cutoff; outputs under `root.display`.
+//! - `watch`: watches on delayed calls (hold, hysteresis, repeat, snooze).
+//! - `actions`: set / call / swap / show / hide / alert, with control feedback.
+//! - [`events`]: the trial's event log.
+//!
+//! Architecture invariant: a layout talks to the rest of the OCU only through the
+//! DataServer: it publishes windows and widgets under `root.display`, widget events and
+//! bindings as methods, watches, feedback and alerts under `root.operator`.
+
+mod actions;
+mod convert;
+pub mod events;
+pub mod graph;
+pub mod lower;
+mod watch;
+
+pub use events::{EventSink, JsonlLog, MemorySink, NullSink};
+pub use graph::{Layout, LayoutConfig, LayoutStats, LoadError};

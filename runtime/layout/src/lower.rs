@@ -1,0 +1,346 @@
+//! Lowering: the checked program's typed expressions to the JIT's IR. Every path becomes an
+//! input slot; the list of slots is the expression's subscription set.
+
+use mocu_jit as jit;
+use mocu_language::program::{Arg, Expr, FormatPart, Node, Path, PathBase};
+use mocu_language::types::{Type, TypeKind};
+use std::sync::Arc;
+
+/// Where a path starts.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Base {
+    Root,
+    /// A template variable: the instance's object.
+    Var(String),
+    /// `self` in a menu: the object the menu was opened on.
+    SelfObject,
+}
+
+/// Where an input slot's value comes from.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Source {
+    /// A property reached by object names from a base.
+    Path { base: Base, objects: Vec<String>, property: String },
+    /// A binding's implicit value (`axis`, `delta`).
+    Input(String),
+    /// A component parameter (`value`, `range.min`, `w`, …) when drawing.
+    Param(String),
+    /// The position of a template instance.
+    Index,
+}
+
+/// Why an expression could not be lowered (a construct the checker accepted but that has
+/// no value here, e.g. an object used as a number). Reported, never a panic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LowerError(pub String);
+
+impl std::fmt::Display for LowerError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// What names mean while lowering.
+pub enum Scope<'a> {
+    /// A widget's arguments: `Param(x)` is the sibling argument `x`; `w`/`h` its size.
+    Widget { args: &'a [Arg], at: &'a [mocu_language::program::Bound] },
+    /// A component body: parameters and `w`/`h` are input slots the renderer fills.
+    Component,
+    /// Anything else (windows, watches, actions, bindings).
+    Plain,
+}
+
+/// Lowers expressions of one function, collecting its input slots.
+pub struct Lowerer<'a> {
+    pub slots: Vec<(Source, jit::Ty)>,
+    scope: Scope<'a>,
+    /// Screen size, to turn `%` into pixels.
+    screen: (f64, f64),
+    depth: u32,
+}
+
+/// The JIT type of a checked type, if it has one on its own.
+pub fn value_ty(t: &Type) -> Option<jit::Ty> {
+    match t.kind {
+        TypeKind::Number { .. } | TypeKind::Duration => Some(jit::Ty::Num),
+        TypeKind::Bool => Some(jit::Ty::Bool),
+        TypeKind::String => Some(jit::Ty::Str),
+        TypeKind::Colour => Some(jit::Ty::Color),
+        _ => None,
+    }
+}
+
+impl<'a> Lowerer<'a> {
+    pub fn new(scope: Scope<'a>, screen: (f64, f64)) -> Lowerer<'a> {
+        Lowerer { slots: Vec::new(), scope, screen, depth: 0 }
+    }
+
+    fn slot(&mut self, source: Source, ty: jit::Ty) -> jit::Expr {
+        let i = match self.slots.iter().position(|(s, t)| *s == source && *t == ty) {
+            Some(i) => i,
+            None => {
+                self.slots.push((source, ty));
+                self.slots.len() - 1
+            }
+        };
+        jit::Expr::Input(i as u32, ty)
+    }
+
+    /// Lowers a rectangle coordinate: `%` of the screen's width (`horizontal`) or height.
+    pub fn coordinate(&mut self, e: &Expr, horizontal: bool) -> Result<jit::Expr, LowerError> {
+        let v = self.lower(e, jit::Ty::Num)?;
+        if e.ty.unit() == Some("%") {
+            let dim = if horizontal { self.screen.0 } else { self.screen.1 };
+            return Ok(jit::Expr::Arith(
+                jit::Arith::Mul,
+                Box::new(v),
+                Box::new(jit::Expr::Num(dim / 100.0)),
+            ));
+        }
+        Ok(v)
+    }
+
+    /// Lowers `e` as a value of type `want` where its own type does not decide (dynamic
+    /// paths take the type their use needs).
+    pub fn lower(&mut self, e: &Expr, want: jit::Ty) -> Result<jit::Expr, LowerError> {
+        self.depth += 1;
+        if self.depth > 64 {
+            return Err(LowerError("arguments refer to each other too deeply (a cycle?)".into()));
+        }
+        let r = self.lower_inner(e, want);
+        self.depth -= 1;
+        r
+    }
+
+    fn lower_inner(&mut self, e: &Expr, want: jit::Ty) -> Result<jit::Expr, LowerError> {
+        let ty = value_ty(&e.ty).unwrap_or(want);
+        let bx = Box::new;
+        Ok(match &e.node {
+            Node::Number(x) | Node::Duration(x) => jit::Expr::Num(*x),
+            Node::Bool(b) => jit::Expr::Bool(*b),
+            Node::Str(s) => jit::Expr::Str(Arc::from(s.as_str())),
+            Node::Colour(c) => jit::Expr::Color(*c),
+            Node::Path(p) => {
+                let source = self.path_source(p)?;
+                self.slot(source, ty)
+            }
+            Node::Param(name) => match &self.scope {
+                Scope::Widget { args, .. } => match args.iter().find(|a| &a.name == name) {
+                    Some(a) => {
+                        let arg = a.value.expr.clone();
+                        self.lower(&arg, ty)?
+                    }
+                    None => jit::Expr::Absent(ty),
+                },
+                Scope::Component => self.slot(Source::Param(name.clone()), ty),
+                Scope::Plain => return Err(LowerError(format!("`{name}` has no value here"))),
+            },
+            Node::Size(n) => match &self.scope {
+                Scope::Widget { at, .. } => {
+                    let i = if n == "w" { 2 } else { 3 };
+                    match at.get(i) {
+                        Some(b) => {
+                            let x = b.expr.clone();
+                            self.lower(&x, jit::Ty::Num)?
+                        }
+                        None => jit::Expr::Absent(jit::Ty::Num),
+                    }
+                }
+                _ => self.slot(Source::Param(n.clone()), jit::Ty::Num),
+            },
+            Node::Input(n) => self.slot(Source::Input(n.clone()), jit::Ty::Num),
+            Node::Index => self.slot(Source::Index, jit::Ty::Num),
+            Node::RangeEnd { range, max } => self.range_end(range, *max)?,
+            Node::Range { .. } => return Err(LowerError("a range is not a single value".into())),
+            Node::Unary { op, arg } => match op {
+                mocu_language::ast::UnOp::Neg => jit::Expr::Neg(bx(self.lower(arg, jit::Ty::Num)?)),
+                mocu_language::ast::UnOp::Not => {
+                    jit::Expr::Not(bx(self.lower(arg, jit::Ty::Bool)?))
+                }
+            },
+            Node::Binary { op, lhs, rhs } => self.binary(*op, lhs, rhs, ty)?,
+            Node::If { cond, then, other } => jit::Expr::If(
+                bx(self.lower(cond, jit::Ty::Bool)?),
+                bx(self.lower(then, ty)?),
+                bx(self.lower(other, ty)?),
+            ),
+            Node::Call { function, args } => self.call(function, args, ty)?,
+            Node::Format(parts) => {
+                let mut pieces = Vec::new();
+                for p in parts {
+                    pieces.push(match p {
+                        FormatPart::Text(t) => jit::Piece::Text(Arc::from(t.as_str())),
+                        FormatPart::Value { expr, spec } => {
+                            let spec = spec.as_ref().map(|s| jit::NumFormat {
+                                zero: s.zero,
+                                width: s.width.map(|w| w.min(64) as u8),
+                                precision: s.precision.map(|p| p.min(17) as u8),
+                            });
+                            self.piece(expr, spec)?
+                        }
+                    });
+                }
+                jit::Expr::Format(pieces)
+            }
+        })
+    }
+
+    fn piece(&mut self, e: &Expr, spec: Option<jit::NumFormat>) -> Result<jit::Piece, LowerError> {
+        let ty =
+            value_ty(&e.ty).unwrap_or(if spec.is_some() { jit::Ty::Num } else { jit::Ty::Str });
+        Ok(match ty {
+            jit::Ty::Num => jit::Piece::Num(self.lower(e, ty)?, spec.unwrap_or_default()),
+            jit::Ty::Str => jit::Piece::Str(self.lower(e, ty)?),
+            jit::Ty::Bool => jit::Piece::Bool(self.lower(e, ty)?),
+            jit::Ty::Color => {
+                return Err(LowerError("a colour cannot be written in a string".into()));
+            }
+        })
+    }
+
+    fn range_end(&mut self, range: &Expr, max: bool) -> Result<jit::Expr, LowerError> {
+        match &range.node {
+            Node::Range { lo, hi } => self.lower(if max { hi } else { lo }, jit::Ty::Num),
+            Node::Binary { op: mocu_language::ast::BinOp::Range, lhs, rhs } => {
+                self.lower(if max { rhs } else { lhs }, jit::Ty::Num)
+            }
+            Node::Param(name) => match &self.scope {
+                Scope::Widget { args, .. } => match args.iter().find(|a| &a.name == name) {
+                    Some(a) => {
+                        let r = a.value.expr.clone();
+                        self.range_end(&r, max)
+                    }
+                    None => Ok(jit::Expr::Absent(jit::Ty::Num)),
+                },
+                Scope::Component => {
+                    let end = if max { "max" } else { "min" };
+                    Ok(self.slot(Source::Param(format!("{name}.{end}")), jit::Ty::Num))
+                }
+                Scope::Plain => Err(LowerError(format!("`{name}` has no value here"))),
+            },
+            _ => Err(LowerError("`.min`/`.max` of something that is not a range".into())),
+        }
+    }
+
+    fn binary(
+        &mut self,
+        op: mocu_language::ast::BinOp,
+        l: &Expr,
+        r: &Expr,
+        ty: jit::Ty,
+    ) -> Result<jit::Expr, LowerError> {
+        use mocu_language::ast::BinOp as B;
+        let bx = Box::new;
+        let num = |s: &mut Self, e: &Expr| s.lower(e, jit::Ty::Num).map(Box::new);
+        Ok(match op {
+            B::Coalesce => jit::Expr::Coalesce(bx(self.lower(l, ty)?), bx(self.lower(r, ty)?)),
+            B::Range => return Err(LowerError("a range is not a single value".into())),
+            B::Or => {
+                jit::Expr::Or(bx(self.lower(l, jit::Ty::Bool)?), bx(self.lower(r, jit::Ty::Bool)?))
+            }
+            B::And => {
+                jit::Expr::And(bx(self.lower(l, jit::Ty::Bool)?), bx(self.lower(r, jit::Ty::Bool)?))
+            }
+            B::Eq | B::Ne => {
+                let t = value_ty(&l.ty).or(value_ty(&r.ty)).unwrap_or(jit::Ty::Num);
+                let cmp = if op == B::Eq { jit::Cmp::Eq } else { jit::Cmp::Ne };
+                jit::Expr::Cmp(cmp, bx(self.lower(l, t)?), bx(self.lower(r, t)?))
+            }
+            B::Lt | B::Le | B::Gt | B::Ge => {
+                let cmp = match op {
+                    B::Lt => jit::Cmp::Lt,
+                    B::Le => jit::Cmp::Le,
+                    B::Gt => jit::Cmp::Gt,
+                    _ => jit::Cmp::Ge,
+                };
+                jit::Expr::Cmp(cmp, num(self, l)?, num(self, r)?)
+            }
+            B::Add if ty == jit::Ty::Str => jit::Expr::Format(vec![
+                jit::Piece::Str(self.lower(l, jit::Ty::Str)?),
+                jit::Piece::Str(self.lower(r, jit::Ty::Str)?),
+            ]),
+            B::Add | B::Sub | B::Mul | B::Div => {
+                let a = match op {
+                    B::Add => jit::Arith::Add,
+                    B::Sub => jit::Arith::Sub,
+                    B::Mul => jit::Arith::Mul,
+                    _ => jit::Arith::Div,
+                };
+                jit::Expr::Arith(a, num(self, l)?, num(self, r)?)
+            }
+        })
+    }
+
+    fn call(&mut self, f: &str, args: &[Expr], ty: jit::Ty) -> Result<jit::Expr, LowerError> {
+        match f {
+            "present" => {
+                let a = args.first().ok_or_else(|| LowerError("present() needs a value".into()))?;
+                let t = value_ty(&a.ty).unwrap_or(jit::Ty::Num);
+                Ok(jit::Expr::Present(Box::new(self.lower(a, t)?)))
+            }
+            "format" => {
+                let a = args.first().ok_or_else(|| LowerError("format() needs a value".into()))?;
+                let spec = match args.get(1).map(|s| &s.node) {
+                    Some(Node::Str(s)) => Some(parse_spec(s)),
+                    _ => None,
+                };
+                Ok(jit::Expr::Format(vec![self.piece(a, spec)?]))
+            }
+            name => {
+                let b = jit::Builtin::by_name(name)
+                    .ok_or_else(|| LowerError(format!("`{name}` is not a built-in function")))?;
+                if args.len() != b.arity() {
+                    return Err(LowerError(format!("`{name}` takes {} arguments", b.arity())));
+                }
+                let args =
+                    args.iter().map(|a| self.lower(a, jit::Ty::Num)).collect::<Result<_, _>>()?;
+                let _ = ty;
+                Ok(jit::Expr::Call(b, args))
+            }
+        }
+    }
+
+    /// Where a path's value comes from: its base, then object names, then the property.
+    pub fn path_source(&mut self, p: &Path) -> Result<Source, LowerError> {
+        let (base, mut names) = self.path_names(p)?;
+        let property = names.pop().ok_or_else(|| LowerError(format!("`{p}` names no property")))?;
+        Ok(Source::Path { base, objects: names, property })
+    }
+
+    /// A path's base and all its names (an object path: a method target, a source).
+    pub fn path_names(&mut self, p: &Path) -> Result<(Base, Vec<String>), LowerError> {
+        match &p.base {
+            PathBase::Root => Ok((Base::Root, p.segments.clone())),
+            PathBase::SelfObject => Ok((Base::SelfObject, p.segments.clone())),
+            PathBase::Var(v) => Ok((Base::Var(v.clone()), p.segments.clone())),
+            PathBase::Param(name) => {
+                let Scope::Widget { args, .. } = &self.scope else {
+                    return Err(LowerError(format!("`{name}` is not an object here")));
+                };
+                let Some(Node::Path(inner)) =
+                    args.iter().find(|a| &a.name == name).map(|a| &a.value.expr.node)
+                else {
+                    return Err(LowerError(format!("`{name}` is not a path to an object")));
+                };
+                let inner = inner.clone();
+                let (base, mut names) = self.path_names(&inner)?;
+                names.extend(p.segments.iter().cloned());
+                Ok((base, names))
+            }
+        }
+    }
+}
+
+/// `.1`, `03.0`, `5` → a number format.
+pub fn parse_spec(s: &str) -> jit::NumFormat {
+    let s = s.trim_start_matches(':');
+    let (w, p) = match s.split_once('.') {
+        Some((w, p)) => (w, p.parse::<u8>().ok()),
+        None => (s, None),
+    };
+    jit::NumFormat {
+        zero: w.starts_with('0') && w.len() > 1,
+        width: w.parse::<u8>().ok().filter(|w| *w > 0),
+        precision: p.map(|p| p.min(17)),
+    }
+}
