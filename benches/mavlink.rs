@@ -29,10 +29,11 @@ fn datagrams(vehicles: u8) -> Vec<Vec<u8>> {
                     system_status: MavState::MAV_STATE_ACTIVE,
                     mavlink_version: 3,
                 }));
-                let mut s = SYS_STATUS_DATA::default();
-                s.voltage_battery = 12600;
-                s.battery_remaining = 80;
-                push(MavMessage::SYS_STATUS(s));
+                push(MavMessage::SYS_STATUS(SYS_STATUS_DATA {
+                    voltage_battery: 12600,
+                    battery_remaining: 80,
+                    ..SYS_STATUS_DATA::default()
+                }));
             }
             let t = tick as i32;
             push(MavMessage::GLOBAL_POSITION_INT(GLOBAL_POSITION_INT_DATA {
@@ -63,10 +64,11 @@ fn datagrams(vehicles: u8) -> Vec<Vec<u8>> {
                 heading: 90,
                 throttle: 40,
             }));
-            let mut g = GPS_RAW_INT_DATA::default();
-            g.fix_type = GpsFixType::GPS_FIX_TYPE_3D_FIX;
-            g.satellites_visible = 10 + (tick % 3) as u8;
-            push(MavMessage::GPS_RAW_INT(g));
+            push(MavMessage::GPS_RAW_INT(GPS_RAW_INT_DATA {
+                fix_type: GpsFixType::GPS_FIX_TYPE_3D_FIX,
+                satellites_visible: 10 + (tick % 3) as u8,
+                ..GPS_RAW_INT_DATA::default()
+            }));
         }
     }
     out

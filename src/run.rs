@@ -116,7 +116,7 @@ pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
         .modules
         .clone()
         .unwrap_or_else(|| vec![ModuleSpec::new("sim"), ModuleSpec::new("mavlink")]);
-    specs.retain(|s| !(args.no_sim && s.kind == "sim") && !(mavlink_off && s.kind == "mavlink"));
+    specs.retain(|s| !(args.no_sim && s.kind == "sim" || mavlink_off && s.kind == "mavlink"));
     for s in specs.iter_mut().filter(|s| s.kind == "mavlink") {
         if !s.settings.contains_key("address") {
             s.settings.insert("address".into(), args.mavlink.clone().into());
@@ -187,7 +187,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             break;
         }
         frame += 1;
-        if frame % FRAME_RATE as u64 == 0 {
+        if frame.is_multiple_of(FRAME_RATE as u64) {
             eprintln!("{}", summary(&ds, t0.elapsed()));
         }
         let due = t0 + period.mul_f64(frame as f64);

@@ -120,7 +120,7 @@ fn watchdog(ctx: ModuleContext, link: Link, running: Arc<AtomicBool>, n: u64) {
         if !running.load(Ordering::SeqCst) {
             return;
         }
-        if ctx.guard(|| link.watchdog(n % 4 == 0)) {
+        if ctx.guard(|| link.watchdog(n.is_multiple_of(4))) {
             watchdog(ctx, link, running, n + 1);
         }
     });

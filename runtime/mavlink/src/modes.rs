@@ -114,7 +114,7 @@ pub fn mode_name(ap: MavAutopilot, f: Family, custom: u32) -> String {
 /// The custom mode number for a name (case-insensitive), or `custom:N` / `N`.
 pub fn mode_number(ap: MavAutopilot, f: Family, name: &str) -> Result<u32, String> {
     let n = name.trim();
-    if let Some(num) = n.strip_prefix("custom:").unwrap_or(n).parse::<u32>().ok() {
+    if let Ok(num) = n.strip_prefix("custom:").unwrap_or(n).parse::<u32>() {
         return Ok(num);
     }
     if ap == MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA

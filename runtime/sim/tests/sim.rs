@@ -216,7 +216,8 @@ fn camera_frames_flow_through_the_listener() {
     s.step(0.05);
     let cam = ds.resolve(&["vehicles", "usv1", "cameras", "drive"]).unwrap();
     let display = ds.create_object(ds.root(), ObjectInfo::new("display", "window")).unwrap();
-    let got: Arc<Mutex<Vec<(usize, i64, i64, i64)>>> = Arc::default();
+    type Frames = Arc<Mutex<Vec<(usize, i64, i64, i64)>>>;
+    let got: Frames = Arc::default();
     let g = got.clone();
     ds.publish_method(
         display,
