@@ -85,7 +85,8 @@ fn bench(c: &mut Criterion) {
             k += 1;
             s.values.lock()[7] = (k % 100) as f32;
             let ctr = demo::gauge_center(7, W as f32);
-            invalidate_rect(&ds, s.hud, Rect::new(ctr.x - 92.0, ctr.y - 92.0, 184.0, 184.0)).unwrap();
+            invalidate_rect(&ds, s.hud, Rect::new(ctr.x - 92.0, ctr.y - 92.0, 184.0, 184.0))
+                .unwrap();
             let st = s.display.frame();
             assert_eq!(st.partial.len(), 1);
             black_box(st.damage)

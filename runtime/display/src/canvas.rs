@@ -223,6 +223,11 @@ pub trait Canvas {
         self.fill_path(&Path::circle(c, radius), &Brush::Solid(color));
     }
 
+    /// Strokes a circle (a ring `width` wide centred on `radius`).
+    fn stroke_circle(&mut self, c: Point, radius: f32, width: f32, color: Color) {
+        self.stroke_path(&Path::circle(c, radius), &Stroke::new(width), &Brush::Solid(color));
+    }
+
     fn line(&mut self, a: Point, b: Point, width: f32, color: Color) {
         self.stroke_path(&Path::line(a, b), &Stroke::new(width), &Brush::Solid(color));
     }

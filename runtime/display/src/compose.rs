@@ -168,3 +168,16 @@ mod tests {
         }
     }
 }
+
+/// Source-over of one premultiplied colour onto one pixel (lane arithmetic).
+#[inline(always)]
+pub(crate) fn over_px(dst: &mut [u8; 4], src: [u8; 4]) {
+    let s = u32::from_le_bytes(src);
+    let sa = (s >> 24) as u64;
+    if sa == 255 {
+        *dst = src;
+        return;
+    }
+    let d = scale(expand(u32::from_le_bytes(*dst)), 255 - sa);
+    *dst = collapse(expand(s) + d).to_le_bytes();
+}

@@ -48,11 +48,7 @@ pub fn gauge(
         EDGE
     };
     c.fill_circle(center, radius, PANEL);
-    c.stroke_path(
-        &Path::circle(center, radius - 1.0),
-        &Stroke::new(1.5),
-        &Brush::Solid(EDGE.with_alpha(0.35)),
-    );
+    c.stroke_circle(center, radius - 1.0, 1.5, EDGE.with_alpha(0.35));
     let r_arc = radius * 0.8;
     c.stroke_arc(center, r_arc, start, sweep, &Stroke::new(radius * 0.09), DIM.with_alpha(0.5));
     c.stroke_arc(
@@ -117,7 +113,7 @@ pub fn sea_chart(c: &mut dyn Canvas, vehicle: Point, heading_deg: f32) {
         &Path::rect(full),
         &Brush::Linear {
             start: Point::new(0.0, 0.0),
-            end: Point::new(s.w, s.h),
+            end: Point::new(0.0, s.h),
             stops: vec![(0.0, SEA), (1.0, SEA_DEEP)],
         },
     );

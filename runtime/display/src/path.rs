@@ -87,6 +87,26 @@ impl Path {
         b.finish()
     }
 
+    /// The rectangle this path is, when it is exactly an axis-aligned rectangle.
+    pub fn as_rect(&self) -> Option<Rect> {
+        let [PathEl::MoveTo(a), PathEl::LineTo(b), PathEl::LineTo(c), PathEl::LineTo(d), rest @ ..] =
+            self.els.as_slice()
+        else {
+            return None;
+        };
+        if !(rest.is_empty() || rest == [PathEl::Close]) {
+            return None;
+        }
+        let horizontal_first = a.y == b.y && b.x == c.x && c.y == d.y && d.x == a.x;
+        let vertical_first = a.x == b.x && b.y == c.y && c.x == d.x && d.y == a.y;
+        if !(horizontal_first || vertical_first) {
+            return None;
+        }
+        let (x0, x1) = (a.x.min(c.x), a.x.max(c.x));
+        let (y0, y1) = (a.y.min(c.y), a.y.max(c.y));
+        Some(Rect::new(x0, y0, x1 - x0, y1 - y0))
+    }
+
     pub(crate) fn to_skia(&self) -> Option<tiny_skia::Path> {
         let mut pb = tiny_skia::PathBuilder::with_capacity(self.els.len(), self.els.len() * 3);
         for el in &self.els {

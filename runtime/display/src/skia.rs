@@ -104,6 +104,80 @@ impl SkiaCanvas {
         d.intersects(&self.state.clip.to_rect())
     }
 
+    /// A linear gradient over a pixel-aligned rectangle under an axis-aligned transform:
+    /// tiny-skia's gradient pipeline costs ~10 ns a pixel, this a lookup table and a
+    /// blend (a row copy when the gradient is vertical and opaque). Returns false when the
+    /// case does not apply.
+    fn fast_gradient_rect(
+        &mut self,
+        r: Rect,
+        start: Point,
+        end: Point,
+        stops: &[(f32, Color)],
+    ) -> bool {
+        let dev = self.device();
+        if !dev.is_axis_aligned() || stops.is_empty() {
+            return false;
+        }
+        let d = dev.map_rect(r);
+        let aligned = |v: f32| (v - v.round()).abs() < 1e-3;
+        if !(aligned(d.x) && aligned(d.y) && aligned(d.right()) && aligned(d.bottom())) {
+            return false;
+        }
+        let area = IRect::new(
+            d.x.round() as i32,
+            d.y.round() as i32,
+            (d.right().round() - d.x.round()) as i32,
+            (d.bottom().round() - d.y.round()) as i32,
+        )
+        .intersect(&self.state.clip);
+        if area.is_empty() {
+            return true;
+        }
+        let (p0, p1) = (dev.apply(start), dev.apply(end));
+        let (vx, vy) = (p1.x - p0.x, p1.y - p0.y);
+        let len2 = vx * vx + vy * vy;
+        let lut = gradient_lut(stops);
+        let opaque = lut.iter().all(|c| c[3] == 255);
+        let w = self.pixmap.width() as usize;
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        let t_at = |x: f32, y: f32| -> usize {
+            if len2 <= f32::EPSILON {
+                return 255;
+            }
+            let t = ((x - p0.x) * vx + (y - p0.y) * vy) / len2;
+            (t.clamp(0.0, 1.0) * 255.0 + 0.5) as usize
+        };
+        // t along the row in 16.16 fixed point, stepping by a constant.
+        let step = if len2 > f32::EPSILON { (vx / len2 * 255.0 * 65536.0) as i64 } else { 0 };
+        for y in area.y..area.bottom() {
+            let row = &mut px[y as usize * w + area.x as usize..][..area.w as usize];
+            let fy = y as f32 + 0.5;
+            if vx == 0.0 && opaque {
+                row.fill(lut[t_at(0.0, fy)]);
+                continue;
+            }
+            let t0 = if len2 > f32::EPSILON {
+                ((area.x as f32 + 0.5 - p0.x) * vx + (fy - p0.y) * vy) / len2
+            } else {
+                1.0
+            };
+            let mut acc = (t0 as f64 * 255.0 * 65536.0) as i64 + 32768;
+            for p in row.iter_mut() {
+                let c = lut[(acc >> 16).clamp(0, 255) as usize];
+                acc += step;
+                if c[3] == 255 {
+                    *p = c;
+                } else if c[3] != 0 {
+                    let mut px4 = *p;
+                    over(&mut px4, [c[0] as u32, c[1] as u32, c[2] as u32, c[3] as u32]);
+                    *p = px4;
+                }
+            }
+        }
+        true
+    }
+
     fn blit_text(&mut self, run: &text::ShapedRun, ox: i32, oy: i32, color: Color) {
         let clip = self.state.clip;
         let (pw, _) = (self.pixmap.width() as usize, self.pixmap.height() as usize);
@@ -171,6 +245,25 @@ fn over(px: &mut [u8], src: [u32; 4]) {
     }
 }
 
+/// 256 premultiplied colours along the gradient (stops interpolated unpremultiplied).
+fn gradient_lut(stops: &[(f32, Color)]) -> [[u8; 4]; 256] {
+    std::array::from_fn(|i| {
+        let t = i as f32 / 255.0;
+        let c = match stops.iter().position(|(o, _)| *o >= t) {
+            None => stops[stops.len() - 1].1,
+            Some(0) => stops[0].1,
+            Some(k) => {
+                let (o0, c0) = stops[k - 1];
+                let (o1, c1) = stops[k];
+                let f = if o1 > o0 { (t - o0) / (o1 - o0) } else { 1.0 };
+                let m = |a: u8, b: u8| (a as f32 + (b as f32 - a as f32) * f).round() as u8;
+                Color::rgba(m(c0.r, c1.r), m(c0.g, c1.g), m(c0.b, c1.b), m(c0.a, c1.a))
+            }
+        };
+        crate::compose::premul(c)
+    })
+}
+
 fn skia_paint(brush: &Brush) -> Option<Paint<'static>> {
     let mut paint = Paint { anti_alias: true, ..Paint::default() };
     match brush {
@@ -213,7 +306,100 @@ fn path_bounds(p: &tiny_skia::Path) -> Rect {
     Rect::new(b.x(), b.y(), b.width(), b.height())
 }
 
+impl SkiaCanvas {
+    /// Circles and rings under a translate + uniform scale, with analytic coverage:
+    /// tiny-skia's supersampling rasteriser costs several times more for these, and
+    /// gauges are made of them. `None` when the transform does not allow it.
+    fn ring(&mut self, c: Point, r_out: f32, r_in: f32, color: Color) -> Option<()> {
+        let dev = self.device();
+        if !(dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6) {
+            return None;
+        }
+        let s = dev.sx;
+        let c = dev.apply(c);
+        let (ro, ri) = (r_out * s, (r_in * s).max(0.0));
+        if ro <= 0.0 || color.a == 0 {
+            return Some(());
+        }
+        let bbox = IRect::covering(Rect::new(
+            c.x - ro - 1.0,
+            c.y - ro - 1.0,
+            2.0 * ro + 2.0,
+            2.0 * ro + 2.0,
+        ))
+        .intersect(&self.state.clip);
+        if bbox.is_empty() {
+            return Some(());
+        }
+        let a = color.a as u32;
+        let pre =
+            [div255(color.r as u32 * a), div255(color.g as u32 * a), div255(color.b as u32 * a), a];
+        let solid = pre.map(|v| v as u8);
+        let w = self.pixmap.width() as usize;
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        let cov = |r: f32, d: f32| (r - d + 0.5).clamp(0.0, 1.0);
+        for y in bbox.y..bbox.bottom() {
+            let dy = y as f32 + 0.5 - c.y;
+            let dy2 = dy * dy;
+            let outer2 = (ro + 0.5) * (ro + 0.5);
+            if dy2 >= outer2 {
+                continue;
+            }
+            let half = (outer2 - dy2).sqrt();
+            let x0 = ((c.x - half).floor() as i32).max(bbox.x);
+            let x1 = ((c.x + half).ceil() as i32).min(bbox.right());
+            // Half-chords (in pixel-centre distance) of: full coverage by the outer edge,
+            // the hollow inside the inner edge, and the inner edge's influence.
+            let chord = |r: f32| if r > 0.0 && r * r > dy2 { (r * r - dy2).sqrt() } else { -1.0 };
+            let h_solid = chord(ro - 0.5);
+            let h_hollow = if ri > 0.0 { chord(ri - 0.5) } else { -1.0 };
+            let h_inner = if ri > 0.0 { chord(ri + 0.5) } else { -1.0 };
+            let row = &mut px[y as usize * w..][..w];
+            let mut x = x0;
+            while x < x1 {
+                let dx = x as f32 + 0.5 - c.x;
+                let adx = dx.abs();
+                if adx < h_hollow {
+                    // Skip to the first pixel past the hollow.
+                    let next = (c.x + h_hollow - 0.5).floor() as i32 + 1;
+                    x = next.max(x + 1);
+                    continue;
+                }
+                let k = if adx <= h_solid && adx >= h_inner {
+                    255
+                } else {
+                    let d = (dx * dx + dy2).sqrt();
+                    let v = cov(ro, d) - if ri > 0.0 { cov(ri, d) } else { 0.0 };
+                    (v * 255.0 + 0.5) as u32
+                };
+                if k == 255 {
+                    crate::compose::over_px(&mut row[x as usize], solid);
+                } else if k > 0 {
+                    let src =
+                        [pre[0] * k, pre[1] * k, pre[2] * k, pre[3] * k].map(|v| div255(v) as u8);
+                    crate::compose::over_px(&mut row[x as usize], src);
+                }
+                x += 1;
+            }
+        }
+        Some(())
+    }
+}
+
 impl Canvas for SkiaCanvas {
+    fn fill_circle(&mut self, c: Point, radius: f32, color: Color) {
+        if self.ring(c, radius, 0.0, color).is_none() {
+            self.fill_path(&Path::circle(c, radius), &Brush::Solid(color));
+        }
+    }
+
+    fn stroke_circle(&mut self, c: Point, radius: f32, width: f32, color: Color) {
+        let h = width / 2.0;
+        if self.ring(c, radius + h, (radius - h).max(0.0), color).is_none() {
+            self.stroke_path(&Path::circle(c, radius), &Stroke::new(width), &Brush::Solid(color));
+        }
+    }
+
     fn size(&self) -> Size {
         self.size
     }
@@ -268,6 +454,12 @@ impl Canvas for SkiaCanvas {
     }
 
     fn fill_path(&mut self, path: &Path, brush: &Brush) {
+        if let Brush::Linear { start, end, stops } = brush
+            && let Some(r) = path.as_rect()
+            && self.fast_gradient_rect(r, *start, *end, stops)
+        {
+            return;
+        }
         let Some(p) = path.to_skia() else { return };
         if !self.visible(path_bounds(&p), 0.0) {
             return;
