@@ -347,6 +347,7 @@ impl Display {
         self.compositor.present()
     }
 
+    #[cfg(feature = "gpu")]
     pub(crate) fn compositor_mut(&mut self) -> &mut dyn Compositor {
         &mut *self.compositor
     }
