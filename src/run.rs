@@ -1,17 +1,20 @@
-//! `mocu run`: the OCU itself. Starts the DataServer and the module host with the modules a
-//! profile names (or the defaults: the simulator and MAVLink), runs frames at 60 Hz until
-//! `--frames N` have passed or Ctrl-C, and prints `--dump PATH` as JSON on exit.
-//!
-//! Until the display lands, every run is headless: a compact summary of the vehicles goes
-//! to stderr about once a second; stdout carries only the `--dump` JSON.
+//! `mocu run`: the OCU itself. Checks the target (a layout, a profile or a bundle), starts
+//! the DataServer, the module host with the modules the profile names (or the defaults: the
+//! simulator and MAVLink), the display modules (window manager, widget renderer, map) and
+//! the layout, then runs frames at 60 Hz — in a window where there is a display, headless
+//! otherwise — until `--frames N` have passed or Ctrl-C, and prints `--dump PATH` as JSON
+//! on exit. Headless runs print a compact summary of the vehicles to stderr once a second;
+//! stdout carries only the `--dump` JSON.
 
 use mocu_dataserver::{DataServer, Guid, Value};
+use mocu_display::{BackendChoice, Display, DisplayOptions, WindowOptions, run_window};
 use mocu_host::{Events, HostEvent, Level, ModuleHost, ModuleSpec, Registry};
-use std::io::Write;
+use mocu_layout::{EventSink, JsonlLog, Layout, LayoutConfig, NullSink};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 /// The display rate: one frame every 1/60 s.
 const FRAME_RATE: f64 = 60.0;
@@ -20,7 +23,7 @@ const FRAME_RATE: f64 = 60.0;
 pub struct RunArgs {
     /// A layout (`.mocu`), a profile (`.toml`) or a built profile bundle.
     pub target: PathBuf,
-    /// Run without a window (the only mode until the display module lands).
+    /// Run without a window even where there is a display.
     #[arg(long)]
     pub headless: bool,
     /// Run N frames at the display rate, then exit.
@@ -50,6 +53,12 @@ pub struct RunArgs {
     /// Do not watch the layout files for changes.
     #[arg(long)]
     pub no_watch: bool,
+    /// Which of a profile's layouts to show (its file name or stem); the first by default.
+    #[arg(long, value_name = "NAME")]
+    pub layout: Option<String>,
+    /// Evaluate layout expressions with the reference interpreter instead of the JIT.
+    #[arg(long)]
+    pub interpret: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -62,43 +71,59 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// What TARGET is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TargetKind {
-    Layout,
-    Profile,
-    Bundle,
-}
-
-/// A loaded TARGET. Layout compilation is wired in later; for now a profile contributes its
-/// `[[modules]]` list.
+/// A checked TARGET: the bundle (layouts, schema, profile) and the modules to start.
 pub struct Target {
-    pub path: PathBuf,
-    pub kind: TargetKind,
-    /// The profile's `[[modules]]`, when it names any.
+    pub bundle: mocu_language::Bundle,
+    /// The profile's modules, when it names any.
     pub modules: Option<Vec<ModuleSpec>>,
 }
 
-/// Loads TARGET: checks it exists, tells a layout from a profile from a bundle, and reads a
-/// profile's module list. (Layouts and bundles are validated for existence only so far.)
-pub fn load_target(path: &Path) -> Result<Target, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-    let kind = match ext {
-        "toml" => TargetKind::Profile,
-        "mocu" => TargetKind::Layout,
-        _ if meta.is_dir() => TargetKind::Layout,
-        _ => TargetKind::Bundle,
+/// Why TARGET could not be run.
+pub enum TargetError {
+    /// Unreadable, or not a layout, profile or bundle: exit 2.
+    Io(String),
+    /// The sources have errors (already rendered): exit 1.
+    Diagnostics(String),
+}
+
+/// Loads and checks TARGET. A profile's modules (`[modules.NAME]` tables, each handed to
+/// its module as settings; `kind` defaults to NAME) start in the order of their `order`
+/// setting, then the core order sim, mavlink, video, then by name.
+pub fn load_target(path: &Path) -> Result<Target, TargetError> {
+    let (bundle, warnings) = match mocu_language::load_target(path) {
+        Ok(x) => x,
+        Err(mocu_language::LoadError::Diagnostics { rendered, .. }) => {
+            return Err(TargetError::Diagnostics(rendered));
+        }
+        Err(e) => return Err(TargetError::Io(e.to_string())),
     };
-    let modules = if kind == TargetKind::Profile {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let table: toml::Table =
-            text.parse().map_err(|e| format!("{}: not a TOML profile: {e}", path.display()))?;
-        ModuleSpec::list_from_profile(&table).map_err(|e| format!("{}: {e}", path.display()))?
-    } else {
-        None
+    if !warnings.trim().is_empty() {
+        eprint!("{warnings}");
+    }
+    let modules = match &bundle.profile {
+        Some(p) if !p.modules.is_empty() => {
+            let mut specs = Vec::new();
+            for (name, settings) in &p.modules {
+                let mut table: toml::Table = serde_json::from_value(settings.clone())
+                    .map_err(|e| TargetError::Io(format!("module `{name}`: {e}")))?;
+                table.insert("name".into(), toml::Value::String(name.clone()));
+                let spec =
+                    ModuleSpec::from_table(&table).map_err(|e| TargetError::Io(e.to_string()))?;
+                specs.push(spec);
+            }
+            let rank = |s: &ModuleSpec| {
+                let order =
+                    s.settings.get("order").and_then(|v| v.as_integer()).unwrap_or(i64::MAX);
+                let core =
+                    ["sim", "mavlink", "video"].iter().position(|k| *k == s.kind).unwrap_or(9);
+                (order, core, s.name.clone())
+            };
+            specs.sort_by_key(rank);
+            Some(specs)
+        }
+        _ => None,
     };
-    Ok(Target { path: path.to_path_buf(), kind, modules })
+    Ok(Target { bundle, modules })
 }
 
 /// The module kinds this binary knows. A project replaces one by registering its own.
@@ -149,60 +174,114 @@ fn catch_ctrl_c() {}
 pub fn main(args: RunArgs) -> ExitCode {
     let target = match load_target(&args.target) {
         Ok(t) => t,
-        Err(e) => {
+        Err(TargetError::Io(e)) => {
             eprintln!("mocu run: {e}");
             return ExitCode::from(2);
         }
+        Err(TargetError::Diagnostics(rendered)) => {
+            eprint!("{rendered}");
+            eprintln!("mocu run: {} has errors; nothing to run", args.target.display());
+            return ExitCode::from(1);
+        }
     };
-    let mut log = match &args.log {
-        None => None,
-        Some(p) => match std::fs::OpenOptions::new().create(true).append(true).open(p) {
-            Ok(f) => Some(std::io::BufWriter::new(f)),
+    let sink: Arc<dyn EventSink> = match &args.log {
+        None => Arc::new(NullSink),
+        Some(p) => match JsonlLog::append(p) {
+            Ok(l) => Arc::new(l),
             Err(e) => {
                 eprintln!("mocu run: --log {}: {e}", p.display());
                 return ExitCode::from(2);
             }
         },
     };
-    if args.screenshot.is_some() || args.size.is_some() {
+    let Some(chosen) = choose_layout(&target, args.layout.as_deref()) else {
+        let names: Vec<&str> = target.bundle.layouts.iter().map(|l| l.path.as_str()).collect();
         eprintln!(
-            "mocu run: no display module yet: running headless (--size/--screenshot ignored)"
+            "mocu run: no layout `{}` in the profile (it has: {})",
+            args.layout.as_deref().unwrap_or(""),
+            names.join(", ")
         );
-    }
+        return ExitCode::from(2);
+    };
     catch_ctrl_c();
-    eprintln!("mocu: running {:?} {} (headless)", target.kind, target.path.display());
+    let screen = args.size.unwrap_or_else(|| match &target.bundle.profile {
+        Some(p) => (p.screen[0].max(1.0) as u32, p.screen[1].max(1.0) as u32),
+        None => (1920, 1080),
+    });
+    let windowed = !args.headless && std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty());
 
     let ds = DataServer::default();
     let mut host = ModuleHost::new(ds.clone(), registry());
     let events = host.events();
-    let specs = module_specs(&target, &args);
-    host.start_all(&specs);
+    host.start_all(&module_specs(&target, &args));
 
-    let period = Duration::from_secs_f64(1.0 / FRAME_RATE);
-    let t0 = Instant::now();
-    let mut frame: u64 = 0;
-    loop {
-        drain_events(&events, &mut log);
-        if args.frames.is_some_and(|n| frame >= n) || INTERRUPTED.load(Ordering::SeqCst) {
-            break;
+    // The display's modules, then the layout: each finds the others through root.display.
+    let program = &target.bundle.layouts[chosen].program;
+    let library =
+        match mocu_widgets::Library::compile(&all_components(&target.bundle), !args.interpret) {
+            Ok(l) => l,
+            Err(e) => {
+                eprintln!("mocu run: {e}");
+                return ExitCode::from(1);
+            }
+        };
+    let _ = mocu_display::ensure_display_object(&ds, screen.0, screen.1);
+    let renderer =
+        mocu_widgets::WidgetRenderer::start(&ds, library, mocu_widgets::RendererConfig::default());
+    let map = mocu_widgets::MapModule::start(&ds);
+    if let Err(e) = renderer.as_ref().and(map.as_ref()) {
+        eprintln!("mocu run: cannot start the display modules: {e}");
+    }
+    let config = LayoutConfig {
+        screen: (screen.0 as f64, screen.1 as f64),
+        jit: !args.interpret,
+        name: target.bundle.layouts[chosen].path.clone(),
+        ..LayoutConfig::default()
+    };
+    let layout = match Layout::load(&ds, program, config, sink.clone()) {
+        Ok(l) => l,
+        Err(e) => {
+            eprintln!("mocu run: {e}");
+            return ExitCode::from(1);
         }
-        frame += 1;
-        if frame.is_multiple_of(FRAME_RATE as u64) {
-            eprintln!("{}", summary(&ds, t0.elapsed()));
+    };
+    eprintln!(
+        "mocu: running {} ({})",
+        target.bundle.layouts[chosen].path,
+        if windowed { "window" } else { "headless" }
+    );
+
+    let mut code = ExitCode::SUCCESS;
+    let mut ran_window = false;
+    if windowed {
+        let opts = WindowOptions {
+            title: format!("Mocu — {}", target.bundle.layouts[chosen].path),
+            display: DisplayOptions::new(screen.0, screen.1),
+            frames: args.frames,
+            screenshot: args.screenshot.clone(),
+        };
+        let ev = events.clone();
+        let s2 = sink.clone();
+        match run_window(&ds, opts, move |_d| drain_events(&ev, &s2)) {
+            Ok(c) => {
+                ran_window = true;
+                eprintln!("mocu: window closed after {} frames drawn", c.frames_drawn);
+            }
+            Err(e) => eprintln!(
+                "mocu: no window ({e}); falling back to headless frames on the CPU (tiny-skia)"
+            ),
         }
-        let due = t0 + period.mul_f64(frame as f64);
-        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    if !ran_window {
+        code = run_headless(&ds, &args, screen, &events, &sink);
     }
 
+    drop(layout);
+    drop(renderer);
+    drop(map);
     host.stop_all();
     ds.quiesce();
-    drain_events(&events, &mut log);
-    if let Some(l) = log.as_mut()
-        && let Err(e) = l.flush()
-    {
-        eprintln!("mocu run: --log: {e}");
-        return ExitCode::from(2);
-    }
+    drain_events(&events, &sink);
     if let Some(path) = &args.dump {
         match dump(&ds, path) {
             Ok(json) => println!("{json}"),
@@ -212,11 +291,86 @@ pub fn main(args: RunArgs) -> ExitCode {
             }
         }
     }
+    code
+}
+
+/// The layout to show: `--layout NAME` (file name or stem) or the first.
+fn choose_layout(target: &Target, name: Option<&str>) -> Option<usize> {
+    let layouts = &target.bundle.layouts;
+    match name {
+        None => (!layouts.is_empty()).then_some(0),
+        Some(n) => layouts.iter().position(|l| {
+            let p = Path::new(&l.path);
+            l.path == n
+                || p.file_name().is_some_and(|f| f == n)
+                || p.file_stem().is_some_and(|f| f == n)
+        }),
+    }
+}
+
+/// Every component of every layout of the bundle, once (the first definition wins).
+fn all_components(bundle: &mocu_language::Bundle) -> mocu_language::Program {
+    let mut p = mocu_language::Program::default();
+    for l in &bundle.layouts {
+        for c in &l.program.components {
+            if !p.components.iter().any(|x| x.name == c.name) {
+                p.components.push(c.clone());
+            }
+        }
+    }
+    p
+}
+
+/// Frames at 60 Hz on the CPU compositor, drawn only when something changed.
+fn run_headless(
+    ds: &DataServer,
+    args: &RunArgs,
+    screen: (u32, u32),
+    events: &Events,
+    sink: &Arc<dyn EventSink>,
+) -> ExitCode {
+    let mut display =
+        match Display::new(ds, DisplayOptions::new(screen.0, screen.1).backend(BackendChoice::Cpu))
+        {
+            Ok(d) => d,
+            Err(e) => {
+                eprintln!("mocu run: cannot start the display: {e}");
+                return ExitCode::from(2);
+            }
+        };
+    let period = Duration::from_secs_f64(1.0 / FRAME_RATE);
+    let t0 = Instant::now();
+    let mut frame: u64 = 0;
+    loop {
+        drain_events(events, sink);
+        if args.frames.is_some_and(|n| frame >= n) || INTERRUPTED.load(Ordering::SeqCst) {
+            break;
+        }
+        frame += 1;
+        display.tick_animations();
+        display.frame();
+        if frame.is_multiple_of(FRAME_RATE as u64) {
+            eprintln!("{}", summary(ds, t0.elapsed()));
+        }
+        let due = t0 + period.mul_f64(frame as f64);
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    // Whatever changed during the last frame period is on the last frame.
+    ds.quiesce();
+    display.frame();
+    if let Some(p) = &args.screenshot
+        && let Err(e) = display.screenshot(p)
+    {
+        eprintln!("mocu run: --screenshot {}: {e}", p.display());
+        return ExitCode::from(2);
+    }
+    let c = display.counters();
+    eprintln!("mocu: {} frames, {} drawn", frame, c.frames_drawn);
     ExitCode::SUCCESS
 }
 
 /// Prints the host's reports on stderr and writes trial records to the log.
-fn drain_events(events: &Events, log: &mut Option<impl Write>) {
+fn drain_events(events: &Events, sink: &Arc<dyn EventSink>) {
     for e in events.try_iter() {
         match e {
             HostEvent::Started { module, kind } => {
@@ -238,25 +392,12 @@ fn drain_events(events: &Events, log: &mut Option<impl Write>) {
                 eprintln!("mocu: {module}: {l}{text}");
             }
             HostEvent::Record { module, event, fields } => {
-                if let Some(w) = log.as_mut() {
-                    let _ = writeln!(w, "{}", record_json(&module, &event, &fields));
-                }
+                let mut f: Vec<(&str, Value)> = vec![("module", Value::str(&module))];
+                f.extend(fields.iter().map(|(k, v)| (k.as_str(), v.clone())));
+                sink.record(&event, &f);
             }
         }
     }
-}
-
-/// One `--log` line: `{"time": <unix seconds>, "event": …, "module": …, fields…}`.
-fn record_json(module: &str, event: &str, fields: &[(String, Value)]) -> String {
-    let time = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64());
-    let q = |s: &str| Value::str(s).to_json().to_string();
-    let mut out =
-        format!("{{\"time\": {time:.3}, \"event\": {}, \"module\": {}", q(event), q(module));
-    for (k, v) in fields {
-        out.push_str(&format!(", {}: {}", q(k), v.to_json()));
-    }
-    out.push('}');
-    out
 }
 
 /// One line: every vehicle with its speed, heading and fuel.

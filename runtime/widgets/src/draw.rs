@@ -1,0 +1,94 @@
+//! Drawing primitives (rect, rounded, circle, arc, line, polyline, text, image) onto any
+//! backend's [`Canvas`]. A primitive with an absent coordinate is skipped, not drawn at 0.
+
+use crate::component::ShapeOut;
+use mocu_display::{Align, Baseline, Brush, Canvas, Color, Path, Point, Rect, Stroke, TextStyle};
+use mocu_value::Value;
+
+/// `0xRRGGBBAA` as a colour.
+pub fn color(rgba: i64) -> Color {
+    let c = rgba as u32;
+    Color::rgba((c >> 24) as u8, (c >> 16) as u8, (c >> 8) as u8, c as u8)
+}
+
+fn num(v: &Option<Value>) -> Option<f32> {
+    v.as_ref().and_then(Value::as_f64).map(|x| x as f32)
+}
+
+/// Draws the shapes of one evaluated component.
+pub fn draw_shapes(c: &mut dyn Canvas, shapes: &[ShapeOut], outs: &[Option<Value>]) {
+    for s in shapes {
+        let style = |name: &str| -> Option<&Value> {
+            s.styles.iter().find(|(n, _)| n == name).and_then(|(_, i)| outs[*i].as_ref())
+        };
+        if style("visible").and_then(Value::as_bool) == Some(false) {
+            continue;
+        }
+        let opacity =
+            style("opacity").and_then(Value::as_f64).map_or(1.0, |o| o.clamp(0.0, 1.0) as f32);
+        let paint = |name: &str| -> Option<Color> {
+            style(name)
+                .and_then(Value::as_i64)
+                .map(color)
+                .map(|c| c.with_alpha(c.a as f32 / 255.0 * opacity))
+        };
+        let args = &outs[s.first..s.first + s.args];
+        let width = style("width").and_then(Value::as_f64).map_or(1.0, |w| w as f32);
+        let fill = paint("fill");
+        let stroke = paint("stroke").or_else(|| paint("color").filter(|_| s.kind != "text"));
+        let nums: Option<Vec<f32>> = args.iter().map(num).collect();
+        let path = match (s.kind.as_str(), nums.as_deref()) {
+            ("rect", Some([x, y, w, h])) => {
+                Some(Path::rect(Rect::new(*x, *y, w.max(0.0), h.max(0.0))))
+            }
+            ("rounded", Some([x, y, w, h, r])) => {
+                Some(Path::rounded_rect(Rect::new(*x, *y, w.max(0.0), h.max(0.0)), r.max(0.0)))
+            }
+            ("circle", Some([cx, cy, r])) => Some(Path::circle(Point::new(*cx, *cy), r.max(0.0))),
+            ("arc", Some([cx, cy, r, start, sweep])) => Some(Path::arc(
+                Point::new(*cx, *cy),
+                r.max(0.0),
+                start.to_radians(),
+                sweep.to_radians(),
+            )),
+            ("line", Some([x1, y1, x2, y2])) => {
+                Some(Path::line(Point::new(*x1, *y1), Point::new(*x2, *y2)))
+            }
+            ("polyline", Some(pts)) if pts.len() >= 4 => {
+                let pts: Vec<Point> = pts.chunks_exact(2).map(|p| Point::new(p[0], p[1])).collect();
+                Some(Path::polyline(&pts, false))
+            }
+            _ => None,
+        };
+        match (s.kind.as_str(), path) {
+            ("text", _) => {
+                let (Some(x), Some(y)) = (num(&args[0]), num(&args[1])) else { continue };
+                let Some(text) = args.get(2).and_then(|v| v.as_ref()).map(|v| v.to_string()) else {
+                    continue;
+                };
+                let size = style("size").and_then(Value::as_f64).map_or(14.0, |s| s as f32);
+                let col = paint("color").or(paint("fill")).unwrap_or(Color::rgb(0xe8, 0xf0, 0xf8));
+                let align = match style("align").and_then(Value::as_str) {
+                    Some("center") | Some("centre") => Align::Center,
+                    Some("right") => Align::Right,
+                    _ => Align::Left,
+                };
+                let bold = style("font").and_then(Value::as_str) == Some("bold");
+                let mut ts = TextStyle::new(size, col).align(align).baseline(Baseline::Middle);
+                if bold {
+                    ts = ts.bold();
+                }
+                c.draw_text(&text, Point::new(x, y), &ts);
+            }
+            (_, Some(path)) => {
+                if let Some(f) = fill {
+                    c.fill_path(&path, &Brush::Solid(f));
+                }
+                if let Some(st) = stroke {
+                    c.stroke_path(&path, &Stroke::new(width), &Brush::Solid(st));
+                }
+            }
+            _ => {}
+        }
+    }
+}

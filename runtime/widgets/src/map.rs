@@ -1,0 +1,311 @@
+//! The map module: claims windows of subtype `map` and draws every vehicle under
+//! `root.vehicles` (a symbol pointing along its heading, its name) and its routes with
+//! their waypoints, in local metres, scaled to fit. No tiles.
+
+use mocu_dataserver::{
+    DataServer, DottedPath, Executor, Kind, Notification, PathWatch, Subject, SubscriptionId, Topic,
+};
+use mocu_display::{
+    Align, Baseline, Brush, Canvas, Color, PaintArgs, Path, Point, Rect, Stroke, TextStyle,
+    claim_window, invalidate,
+};
+use mocu_value::{Guid, PropName, Value};
+use parking_lot::Mutex;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+pub struct MapModule {
+    shared: Arc<Shared>,
+}
+
+struct Shared {
+    ds: DataServer,
+    exec: Executor,
+    state: Mutex<State>,
+}
+
+#[derive(Default)]
+struct State {
+    subs: Vec<SubscriptionId>,
+    vehicles_watch: Option<PathWatch>,
+    vehicles_sub: Option<SubscriptionId>,
+    maps: Vec<Guid>,
+    per_vehicle: HashMap<Guid, Vec<PathWatch>>,
+}
+
+impl MapModule {
+    pub fn start(ds: &DataServer) -> Result<MapModule, String> {
+        let display =
+            mocu_display::ensure_display_object(ds, 1920, 1080).map_err(|e| e.to_string())?;
+        let shared = Arc::new(Shared {
+            ds: ds.clone(),
+            exec: ds.serial_executor(),
+            state: Mutex::default(),
+        });
+        let weak = Arc::downgrade(&shared);
+        let sub = ds
+            .subscribe_on(&shared.exec, Topic::children(display), move |n: &Notification| {
+                if let (Some(sh), Subject::Child { guid, .. }) = (weak.upgrade(), &n.subject) {
+                    sh.on_window(n.kind, *guid);
+                }
+            })
+            .map_err(|e| e.to_string())?;
+        let weak = Arc::downgrade(&shared);
+        let watch = ds
+            .watch_object(Guid::ROOT, &["vehicles"], Some(&shared.exec), move |e| {
+                if let Some(sh) = weak.upgrade() {
+                    sh.on_vehicles_folder((e.kind != Kind::Deleted).then_some(e.object));
+                }
+            })
+            .map_err(|e| e.to_string())?;
+        {
+            let mut st = shared.state.lock();
+            st.subs.push(sub);
+            st.vehicles_watch = Some(watch);
+        }
+        Ok(MapModule { shared })
+    }
+}
+
+impl Drop for MapModule {
+    fn drop(&mut self) {
+        let (subs, maps) = {
+            let mut st = self.shared.state.lock();
+            st.vehicles_watch = None;
+            st.per_vehicle.clear();
+            let mut subs = std::mem::take(&mut st.subs);
+            subs.extend(st.vehicles_sub.take());
+            (subs, std::mem::take(&mut st.maps))
+        };
+        for s in subs {
+            self.shared.ds.unsubscribe(s);
+        }
+        for m in maps {
+            let _ = self.shared.ds.unpublish_method(m, "paint");
+        }
+    }
+}
+
+impl Shared {
+    fn on_window(self: &Arc<Self>, kind: Kind, g: Guid) {
+        let is_map = self.ds.info(g).is_ok_and(|i| &*i.subtype == "map");
+        match kind {
+            Kind::New if is_map => {
+                let weak = Arc::downgrade(self);
+                let ok = claim_window(&self.ds, g, move |c: &mut dyn Canvas, a: &PaintArgs| {
+                    if let Some(sh) = weak.upgrade() {
+                        sh.paint(c, a);
+                    }
+                });
+                if ok.is_ok() {
+                    self.state.lock().maps.push(g);
+                }
+            }
+            Kind::Deleted => self.state.lock().maps.retain(|m| *m != g),
+            _ => {}
+        }
+    }
+
+    fn on_vehicles_folder(self: &Arc<Self>, folder: Option<Guid>) {
+        let old = self.state.lock().vehicles_sub.take();
+        if let Some(s) = old {
+            self.ds.unsubscribe(s);
+        }
+        self.state.lock().per_vehicle.clear();
+        if let Some(f) = folder {
+            let weak = Arc::downgrade(self);
+            let sub =
+                self.ds.subscribe_on(&self.exec, Topic::children(f), move |n: &Notification| {
+                    if let (Some(sh), Subject::Child { guid, .. }) = (weak.upgrade(), &n.subject) {
+                        sh.on_vehicle(n.kind, *guid);
+                    }
+                });
+            self.state.lock().vehicles_sub = sub.ok();
+        }
+        self.repaint();
+    }
+
+    fn on_vehicle(self: &Arc<Self>, kind: Kind, v: Guid) {
+        match kind {
+            Kind::New => {
+                let mut watches = Vec::new();
+                for p in ["nav.x", "nav.y", "nav.heading", "nav.lat", "nav.lon"] {
+                    let weak = Arc::downgrade(self);
+                    if let Ok(path) = DottedPath::parse(p)
+                        && let Ok(w) =
+                            self.ds.watch_path_from(v, path, Some(&self.exec), move |_| {
+                                if let Some(sh) = weak.upgrade() {
+                                    sh.repaint();
+                                }
+                            })
+                    {
+                        watches.push(w);
+                    }
+                }
+                self.state.lock().per_vehicle.insert(v, watches);
+            }
+            Kind::Deleted => {
+                self.state.lock().per_vehicle.remove(&v);
+            }
+            Kind::Changed => {}
+        }
+        self.repaint();
+    }
+
+    fn repaint(&self) {
+        let maps = self.state.lock().maps.clone();
+        for m in maps {
+            let _ = invalidate(&self.ds, m);
+        }
+    }
+
+    fn paint(&self, c: &mut dyn Canvas, _a: &PaintArgs) {
+        let size = c.size();
+        let bg = Color::rgba(0x0e, 0x17, 0x22, 0xf0);
+        let grid = Color::rgba(0x38, 0xbd, 0xf8, 0x22);
+        let frame = Color::rgb(0x3a, 0x4a, 0x5a);
+        c.fill_rounded_rect(Rect::new(0.0, 0.0, size.w, size.h), 6.0, &Brush::Solid(bg));
+        // Vehicles and route points in local metres.
+        let vehicles = self.vehicles();
+        let mut pts: Vec<(f64, f64)> = vehicles.iter().map(|v| v.pos).collect();
+        for v in &vehicles {
+            for r in &v.routes {
+                pts.extend(r.iter().copied());
+            }
+        }
+        let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+        for (x, y) in &pts {
+            x0 = x0.min(*x);
+            y0 = y0.min(*y);
+            x1 = x1.max(*x);
+            y1 = y1.max(*y);
+        }
+        if pts.is_empty() {
+            (x0, y0, x1, y1) = (-100.0, -100.0, 100.0, 100.0);
+        }
+        let span = ((x1 - x0).max(y1 - y0)).max(100.0) * 1.3;
+        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
+        let scale = (size.w.min(size.h) as f64 - 20.0).max(10.0) / span;
+        let to_screen = |x: f64, y: f64| {
+            Point::new(
+                (size.w as f64 / 2.0 + (x - cx) * scale) as f32,
+                (size.h as f64 / 2.0 - (y - cy) * scale) as f32,
+            )
+        };
+        // A grid every "nice" distance.
+        let step = nice_step(span / 6.0);
+        let gx0 = ((cx - span) / step).floor() * step;
+        let mut gx = gx0;
+        while gx < cx + span {
+            let a = to_screen(gx, cy - span);
+            let b = to_screen(gx, cy + span);
+            c.line(Point::new(a.x, 0.0), Point::new(b.x, size.h), 1.0, grid);
+            let a = to_screen(cx - span, gx - gx0 + ((cy - span) / step).floor() * step);
+            c.line(Point::new(0.0, a.y), Point::new(size.w, a.y), 1.0, grid);
+            gx += step;
+        }
+        let dim = Color::rgb(0x8f, 0xa3, 0xb5);
+        let scale_text = format!("grid {} m", step);
+        c.draw_text(
+            &scale_text,
+            Point::new(8.0, size.h - 8.0),
+            &TextStyle::new(11.0, dim).baseline(Baseline::Bottom),
+        );
+        for v in &vehicles {
+            for route in &v.routes {
+                let pts: Vec<Point> = route.iter().map(|(x, y)| to_screen(*x, *y)).collect();
+                if pts.len() >= 2 {
+                    c.stroke_path(
+                        &Path::polyline(&pts, false),
+                        &Stroke::new(1.5).dash(&[6.0, 4.0], 0.0),
+                        &Brush::Solid(Color::rgb(0xf5, 0x9e, 0x0b)),
+                    );
+                }
+                for p in pts {
+                    c.fill_circle(p, 3.5, Color::rgb(0xf5, 0x9e, 0x0b));
+                }
+            }
+        }
+        for v in &vehicles {
+            let p = to_screen(v.pos.0, v.pos.1);
+            let h = (v.heading as f32).to_radians();
+            // Heading 0 = north (up), clockwise.
+            let dir = |a: f32, r: f32| Point::new(p.x + (h + a).sin() * r, p.y - (h + a).cos() * r);
+            let tri = Path::polyline(&[dir(0.0, 12.0), dir(2.5, 8.0), dir(-2.5, 8.0)], true);
+            let col =
+                if v.stale { Color::rgb(0x5b, 0x64, 0x70) } else { Color::rgb(0x38, 0xbd, 0xf8) };
+            c.fill_path(&tri, &Brush::Solid(col));
+            c.stroke_path(&tri, &Stroke::new(1.0), &Brush::Solid(Color::rgb(0xe8, 0xf0, 0xf8)));
+            let style = TextStyle::new(12.0, Color::rgb(0xe8, 0xf0, 0xf8))
+                .align(Align::Left)
+                .baseline(Baseline::Middle);
+            c.draw_text(&v.name, Point::new(p.x + 14.0, p.y), &style);
+        }
+        c.stroke_rounded_rect(
+            Rect::new(0.5, 0.5, size.w - 1.0, size.h - 1.0),
+            6.0,
+            &Stroke::new(1.0),
+            frame,
+        );
+    }
+
+    fn vehicles(&self) -> Vec<MapVehicle> {
+        let Some(folder) = self.ds.resolve(&["vehicles"]) else { return Vec::new() };
+        let mut out = Vec::new();
+        let mut origin: Option<(f64, f64)> = None;
+        for v in self.ds.children(folder).unwrap_or_default() {
+            let Some(nav) = self.ds.find_child(v, "nav").ok().flatten() else { continue };
+            let get =
+                |o: Guid, k: &str| self.ds.try_get(o, PropName::new(k)).and_then(|x| x.as_f64());
+            let pos = match (get(nav, "x"), get(nav, "y"), get(nav, "lat"), get(nav, "lon")) {
+                (Some(x), Some(y), _, _) => (x, y),
+                (_, _, Some(lat), Some(lon)) => {
+                    let o = *origin.get_or_insert((lat, lon));
+                    ((lon - o.1) * 111_320.0 * o.0.to_radians().cos(), (lat - o.0) * 110_540.0)
+                }
+                _ => continue,
+            };
+            let name = self.ds.info(v).map(|i| i.name.to_string()).unwrap_or_default();
+            let stale = self.ds.try_get(v, PropName::new("stale")) == Some(Value::Bool(true));
+            let mut routes = Vec::new();
+            if let Some(rs) = self.ds.find_child(v, "routes").ok().flatten() {
+                for r in self.ds.children(rs).unwrap_or_default() {
+                    let wps: Vec<(f64, f64)> = self
+                        .ds
+                        .children(r)
+                        .unwrap_or_default()
+                        .into_iter()
+                        .filter_map(|w| Some((get(w, "x")?, get(w, "y")?)))
+                        .collect();
+                    routes.push(wps);
+                }
+            }
+            out.push(MapVehicle {
+                name,
+                pos,
+                heading: get(nav, "heading").unwrap_or(0.0),
+                stale,
+                routes,
+            });
+        }
+        out
+    }
+}
+
+struct MapVehicle {
+    name: String,
+    pos: (f64, f64),
+    heading: f64,
+    stale: bool,
+    routes: Vec<Vec<(f64, f64)>>,
+}
+
+fn nice_step(x: f64) -> f64 {
+    let p = 10f64.powf(x.max(1.0).log10().floor());
+    for m in [1.0, 2.0, 5.0, 10.0] {
+        if m * p >= x {
+            return m * p;
+        }
+    }
+    10.0 * p
+}
