@@ -270,13 +270,22 @@ impl Shared {
             let mut routes = Vec::new();
             if let Some(rs) = self.ds.find_child(v, "routes").ok().flatten() {
                 for r in self.ds.children(rs).unwrap_or_default() {
-                    let wps: Vec<(f64, f64)> = self
-                        .ds
-                        .children(r)
-                        .unwrap_or_default()
-                        .into_iter()
-                        .filter_map(|w| Some((get(w, "x")?, get(w, "y")?)))
-                        .collect();
+                    // Waypoints form a chain (each the child of the one before, so they can
+                    // be edited by insert-between and delete-and-promote); siblings are
+                    // taken in order too.
+                    let mut wps = Vec::new();
+                    let mut level = self.ds.children(r).unwrap_or_default();
+                    while let Some(&first) = level.first() {
+                        for w in &level {
+                            if let (Some(x), Some(y)) = (get(*w, "x"), get(*w, "y")) {
+                                wps.push((x, y));
+                            }
+                        }
+                        level = self.ds.children(first).unwrap_or_default();
+                        if wps.len() > 10_000 {
+                            break;
+                        }
+                    }
                     routes.push(wps);
                 }
             }
