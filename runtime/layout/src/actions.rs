@@ -4,7 +4,7 @@
 //! and `feedback_reason` properties of the widget), in `root.operator.feedback`, and in
 //! the event log. A refused write is feedback, never a crash.
 
-use crate::graph::{Builder, Shared, State, eval_once, path_text, resolve};
+use crate::graph::{Builder, FnRef, Shared, State, eval_once, path_text, resolve};
 use crate::lower::{Base, LowerError, Lowerer, Scope, value_ty};
 use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
 use mocu_jit as jit;
@@ -15,12 +15,12 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 #[derive(Clone, Debug)]
 pub(crate) enum CompiledAction {
-    Set { base: Base, objects: Vec<String>, property: String, func: usize },
-    Call { base: Base, objects: Vec<String>, method: String, func: usize },
+    Set { base: Base, objects: Vec<String>, property: String, func: FnRef },
+    Call { base: Base, objects: Vec<String>, method: String, func: FnRef },
     Swap { a: String, b: String, ms: f64 },
     Show(String),
     Hide(String),
-    Alert { level: String, func: usize },
+    Alert { level: String, func: FnRef },
 }
 
 pub(crate) fn compile_actions(
@@ -115,7 +115,7 @@ pub(crate) fn run_actions(
         match a {
             CompiledAction::Set { base, objects, property, func } => {
                 let value =
-                    eval_once(sh, *func, cx.instance_object, cx.self_obj, cx.input).remove(0);
+                    eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input).remove(0);
                 let text = format!("{}.{property}", target_text(sh, base, objects, cx));
                 let outcome =
                     match (start(base, cx).and_then(|s| resolve(&sh.ds, s, objects)), &value) {
@@ -146,7 +146,7 @@ pub(crate) fn run_actions(
                 }
             }
             CompiledAction::Call { base, objects, method, func } => {
-                let args = eval_once(sh, *func, cx.instance_object, cx.self_obj, cx.input);
+                let args = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input);
                 let text = format!("{}.{method}", target_text(sh, base, objects, cx));
                 sh.sink.record(
                     "action",
@@ -215,7 +215,7 @@ pub(crate) fn run_actions(
                 sh.sink.record("action", &[("kind", Value::str(kind)), ("window", Value::str(w))]);
             }
             CompiledAction::Alert { level, func } => {
-                let text = eval_once(sh, *func, cx.instance_object, cx.self_obj, cx.input)
+                let text = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input)
                     .remove(0)
                     .unwrap_or(Value::str("(no data)"));
                 if let Some(g) = raise_alert(sh, level, &text.to_string()) {

@@ -77,7 +77,6 @@ pub(crate) struct Shared {
     /// Changes reported by path watches, applied at the next tick. A separate lock: watch
     /// callbacks never wait for an evaluation in progress.
     inbox: Mutex<Inbox>,
-    pub(crate) eval: Arc<dyn Evaluate>,
 }
 
 #[derive(Default)]
@@ -123,7 +122,7 @@ pub(crate) enum Target {
 }
 
 pub(crate) struct Cell {
-    func: usize,
+    f: FnRef,
     inputs: Vec<(Input, jit::Ty)>,
     targets: Vec<Target>,
     last: Vec<Option<Value>>,
@@ -158,19 +157,21 @@ pub(crate) struct Instance {
     watches: Vec<usize>,
 }
 
+#[derive(Clone)]
 pub(crate) struct CompiledWindow {
-    name: String,
+    pub(crate) name: String,
     kind: String,
-    func: usize,
+    f: FnRef,
     source: Option<(Base, Vec<String>)>,
 }
 
+#[derive(Clone)]
 pub(crate) struct CompiledWidget {
-    name: String,
-    window: String,
+    pub(crate) name: String,
+    pub(crate) window: String,
     component: String,
     native: bool,
-    func: usize,
+    f: FnRef,
     /// Output names, in function output order.
     outputs: Vec<String>,
     /// Object-typed arguments: published as dotted-path text.
@@ -179,8 +180,6 @@ pub(crate) struct CompiledWidget {
 }
 
 pub(crate) struct State {
-    pub(crate) funcs: Vec<FuncInfo>,
-    ctx: EvalCtx,
     pub(crate) nodes: Vec<Node>,
     node_ix: HashMap<(Start, Vec<String>, String), usize>,
     pub(crate) cells: Vec<Cell>,
@@ -212,19 +211,76 @@ fn lower_err(e: impl std::fmt::Display) -> LoadError {
     LoadError::Lower(e.to_string())
 }
 
+/// One compilation: functions compiled together into one evaluator (one code allocation).
+/// Cells and actions keep their `Code` alive; code of replaced items is freed when the last
+/// cell using it goes.
+pub(crate) struct Code {
+    eval: std::sync::OnceLock<Arc<dyn Evaluate>>,
+    infos: std::sync::OnceLock<Vec<FuncInfo>>,
+    ctx: Mutex<Option<EvalCtx>>,
+}
+
+/// A function of a compilation.
+#[derive(Clone)]
+pub(crate) struct FnRef {
+    pub(crate) code: Arc<Code>,
+    pub(crate) index: usize,
+}
+
+impl std::fmt::Debug for FnRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "fn#{}", self.index)
+    }
+}
+
+impl FnRef {
+    pub(crate) fn eval(&self) -> &Arc<dyn Evaluate> {
+        self.code.eval.get().expect("a FnRef is used only after its Builder finished")
+    }
+
+    pub(crate) fn slots(&self) -> &[(Source, jit::Ty)] {
+        &self.code.infos.get().expect("finished")[self.index].slots
+    }
+}
+
 /// Collects functions while compiling a layout.
-#[derive(Default)]
 pub(crate) struct Builder {
-    pub(crate) functions: Vec<jit::Function>,
-    pub(crate) infos: Vec<FuncInfo>,
+    code: Arc<Code>,
+    functions: Vec<jit::Function>,
+    infos: Vec<FuncInfo>,
 }
 
 impl Builder {
-    pub(crate) fn add(&mut self, lw: Lowerer, outputs: Vec<jit::Expr>) -> usize {
+    pub(crate) fn new() -> Builder {
+        Builder {
+            code: Arc::new(Code {
+                eval: std::sync::OnceLock::new(),
+                infos: std::sync::OnceLock::new(),
+                ctx: Mutex::new(None),
+            }),
+            functions: Vec::new(),
+            infos: Vec::new(),
+        }
+    }
+
+    pub(crate) fn add(&mut self, lw: Lowerer, outputs: Vec<jit::Expr>) -> FnRef {
         let inputs = lw.slots.iter().map(|s| s.1).collect();
         self.functions.push(jit::Function { inputs, outputs });
         self.infos.push(FuncInfo { slots: lw.slots });
-        self.functions.len() - 1
+        FnRef { code: self.code.clone(), index: self.functions.len() - 1 }
+    }
+
+    /// Compiles everything added (Cranelift, or the interpreter).
+    pub(crate) fn finish(self, use_jit: bool) -> Result<(), LoadError> {
+        let eval: Arc<dyn Evaluate> = if use_jit {
+            Arc::new(jit::compile(&self.functions).map_err(|e| LoadError::Compile(e.to_string()))?)
+        } else {
+            Arc::new(jit::Interpreter::new(&self.functions).map_err(|e| LoadError::Compile(e.to_string()))?)
+        };
+        *self.code.ctx.lock() = Some(eval.context());
+        let _ = self.code.eval.set(eval);
+        let _ = self.code.infos.set(self.infos);
+        Ok(())
     }
 }
 
@@ -250,8 +306,8 @@ fn compile_window(
         },
         None => None,
     };
-    let func = b.add(lw, outs);
-    Ok(CompiledWindow { name: w.name.clone(), kind: w.kind.clone(), func, source })
+    let f = b.add(lw, outs);
+    Ok(CompiledWindow { name: w.name.clone(), kind: w.kind.clone(), f, source })
 }
 
 const WINDOW_OUTPUTS: [&str; 7] = ["layer", "x", "y", "w", "h", "opacity", "visible"];
@@ -305,7 +361,7 @@ fn compile_widget(
             }
         }
     }
-    let func = b.add(lw, outs);
+    let f = b.add(lw, outs);
     let mut handlers = Vec::new();
     for h in &w.handlers {
         let acts = actions::compile_actions(b, &h.actions, screen).map_err(lower_err)?;
@@ -317,7 +373,7 @@ fn compile_widget(
         window: w.window.clone(),
         component: w.component.clone(),
         native: w.native,
-        func,
+        f,
         outputs: names,
         objects,
         handlers,
@@ -334,7 +390,7 @@ impl Layout {
         sink: Arc<dyn EventSink>,
     ) -> Result<Layout, LoadError> {
         let screen = config.screen;
-        let mut b = Builder::default();
+        let mut b = Builder::new();
         let windows: Vec<CompiledWindow> = program
             .windows
             .iter()
@@ -361,14 +417,7 @@ impl Layout {
                 actions::compile_actions(&mut b, &bind.actions, screen).map_err(lower_err)?;
             bindings.push((format!("{}.{}.{}", bind.device, bind.kind, bind.input), acts));
         }
-        let eval: Arc<dyn Evaluate> = if config.jit {
-            Arc::new(jit::compile(&b.functions).map_err(|e| LoadError::Compile(e.to_string()))?)
-        } else {
-            Arc::new(
-                jit::Interpreter::new(&b.functions)
-                    .map_err(|e| LoadError::Compile(e.to_string()))?,
-            )
-        };
+        b.finish(config.jit)?;
         let display = ensure_object(ds, Guid::ROOT, "display", "display")?;
         let _ = ds.set(display, "width", Value::Float(screen.0));
         let _ = ds.set(display, "height", Value::Float(screen.1));
@@ -378,8 +427,6 @@ impl Layout {
             sink,
             config,
             state: Mutex::new(State {
-                funcs: b.infos,
-                ctx: eval.context(),
                 nodes: Vec::new(),
                 node_ix: HashMap::new(),
                 cells: Vec::new(),
@@ -395,7 +442,6 @@ impl Layout {
                 closed: false,
             }),
             inbox: Mutex::new(Inbox::default()),
-            eval,
         });
         {
             let mut st = shared.state.lock();
@@ -610,12 +656,12 @@ impl Shared {
     pub(crate) fn add_cell(
         self: &Arc<Self>,
         st: &mut State,
-        func: usize,
+        f: &FnRef,
         targets: Vec<Target>,
         instance: Option<usize>,
     ) -> usize {
         let idx = st.cells.len();
-        let slots = st.funcs[func].slots.clone();
+        let slots = f.slots().to_vec();
         let mut inputs = Vec::with_capacity(slots.len());
         for (src, ty) in slots {
             let input = match &src {
@@ -636,7 +682,7 @@ impl Shared {
         }
         let n = targets.len();
         st.cells.push(Cell {
-            func,
+            f: f.clone(),
             inputs,
             targets,
             last: vec![None; n],
@@ -706,8 +752,11 @@ impl Shared {
             }
             st.cells[c].dirty = false;
             st.evaluations += 1;
-            let State { cells, nodes, ctx, instances, .. } = &mut *st;
+            let State { cells, nodes, instances, .. } = &mut *st;
             let cell = &cells[c];
+            let f = cell.f.clone();
+            let mut guard = f.code.ctx.lock();
+            let Some(ctx) = guard.as_mut() else { continue };
             slots.clear();
             for (input, ty) in &cell.inputs {
                 slots.push(match input {
@@ -720,11 +769,12 @@ impl Shared {
             }
             outs.clear();
             outs.resize(cell.targets.len(), Slot::ABSENT);
-            self.eval.call(cell.func, &slots, &mut outs, ctx);
-            let types = self.eval.output_types(cell.func);
+            f.eval().call(f.index, &slots, &mut outs, ctx);
+            let types = f.eval().output_types(f.index);
             let values: Vec<Option<Value>> =
                 outs.iter().zip(types).map(|(s, t)| to_value(s.decode(*t, ctx))).collect();
             ctx.reset();
+            drop(guard);
             for (i, v) in values.into_iter().enumerate() {
                 if st.cells[c].last[i] == v {
                     continue; // early cutoff: an equal result notifies nobody
@@ -787,7 +837,7 @@ impl Shared {
             order += 1;
             let targets =
                 WINDOW_OUTPUTS.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
-            let cell = self.add_cell(st, w.func, targets, instance);
+            let cell = self.add_cell(st, &w.f, targets, instance);
             st.windows.insert(name.clone(), g);
             match instance {
                 Some(i) => {
@@ -845,7 +895,7 @@ impl Shared {
                 let _ = self.ds.set(g, arg.as_str(), Value::str(&text));
             }
             let targets = w.outputs.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
-            let cell = self.add_cell(st, w.func, targets, instance);
+            let cell = self.add_cell(st, &w.f, targets, instance);
             let object = instance.and_then(|i| st.instances[i].as_ref()).map(|i| i.object);
             actions::publish_handlers(self, g, &w.handlers, object);
             if let Some(i) = instance
@@ -1039,16 +1089,15 @@ fn mark(st: &mut State, c: usize) {
 /// DataServer now. `self_obj` binds `self`; `input` the binding's value.
 pub(crate) fn eval_once(
     sh: &Shared,
-    func: usize,
+    f: &FnRef,
     instance_object: Option<Guid>,
     self_obj: Option<Guid>,
     input: Option<f64>,
 ) -> Vec<Option<Value>> {
-    let st = sh.state.lock();
-    let slots_desc = st.funcs[func].slots.clone();
-    drop(st);
-    let mut ctx = sh.eval.context();
-    let slots: Vec<Slot> = slots_desc
+    let eval = f.eval();
+    let mut ctx = eval.context();
+    let slots: Vec<Slot> = f
+        .slots()
         .iter()
         .map(|(src, ty)| match src {
             Source::Path { base, objects, property } => {
@@ -1066,9 +1115,9 @@ pub(crate) fn eval_once(
             Source::Index | Source::Param(_) => Slot::ABSENT,
         })
         .collect();
-    let types = sh.eval.output_types(func).to_vec();
+    let types = eval.output_types(f.index).to_vec();
     let mut outs = vec![Slot::ABSENT; types.len()];
-    sh.eval.call(func, &slots, &mut outs, &mut ctx);
+    eval.call(f.index, &slots, &mut outs, &mut ctx);
     outs.iter().zip(&types).map(|(s, t)| to_value(s.decode(*t, &ctx))).collect()
 }
 

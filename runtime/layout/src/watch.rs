@@ -9,7 +9,7 @@
 //!   until the time is up; then, if the condition still holds, it fires.
 
 use crate::actions::{ActionCtx, CompiledAction, compile_actions, operator_child, run_actions};
-use crate::graph::{Builder, Shared, State, Target};
+use crate::graph::{Builder, FnRef, Shared, State, Target};
 use crate::lower::{Lowerer, Scope};
 use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
 use mocu_jit as jit;
@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 #[derive(Clone, Debug)]
 pub(crate) struct CompiledWatch {
     name: String,
-    func: usize,
+    func: FnRef,
     has_clear: bool,
     hold: Option<Duration>,
     repeat: Option<Duration>,
@@ -133,7 +133,7 @@ pub(crate) fn publish_watch(
         object,
         alerts: Vec::new(),
     });
-    let cell = sh.add_cell(st, w.func, targets, instance);
+    let cell = sh.add_cell(st, &w.func, targets, instance);
     st.watches[idx].cell = cell;
     idx
 }
