@@ -165,12 +165,16 @@ pub struct MenuEntry {
     pub span: Span,
 }
 
-/// `watch name { when cond for 5s then action… }`.
+/// `watch name { when cond for 5s clear when cond2 repeat every 30s then action… }`.
 #[derive(Clone, Debug)]
 pub struct Watch {
     pub name: Ident,
     pub when: Expr,
     pub hold: Option<Expr>,
+    /// Hysteresis: once fired, the watch stays active until this holds.
+    pub clear: Option<Expr>,
+    /// Level triggering: while active, the actions run again every period.
+    pub repeat: Option<Expr>,
     pub actions: Vec<Action>,
     pub span: Span,
 }

@@ -516,17 +516,26 @@ impl Ctx {
             }
             Rule::watch_item => {
                 let name = self.next_ident(&mut inner, span);
-                let mut exprs = Vec::new();
+                let mut when = None;
+                let (mut hold, mut clear, mut repeat) = (None, None, None);
                 let mut actions = Vec::new();
                 for q in inner {
                     match q.as_rule() {
-                        Rule::expr => exprs.push(self.expr(q)),
+                        Rule::expr => when = Some(self.expr(q)),
+                        Rule::watch_hold | Rule::watch_clear | Rule::watch_repeat => {
+                            let rule = q.as_rule();
+                            let e = q.into_inner().next().map(|e| self.expr(e));
+                            match rule {
+                                Rule::watch_hold => hold = e,
+                                Rule::watch_clear => clear = e,
+                                _ => repeat = e,
+                            }
+                        }
                         _ => actions.push(self.action(q)),
                     }
                 }
-                let mut exprs = exprs.into_iter();
-                let when = exprs.next().unwrap_or(Expr { kind: ExprKind::Bool(false), span });
-                Item::Watch(Watch { name, when, hold: exprs.next(), actions, span })
+                let when = when.unwrap_or(Expr { kind: ExprKind::Bool(false), span });
+                Item::Watch(Watch { name, when, hold, clear, repeat, actions, span })
             }
             Rule::each_item => {
                 let var = self.next_ident(&mut inner, span);

@@ -242,6 +242,13 @@ pub struct Watch {
     pub when: Bound,
     /// How long `when` must hold before the actions run, in milliseconds.
     pub hold_ms: Option<f64>,
+    /// `clear when C` (hysteresis): once fired, active until C holds (else until `when`
+    /// stops holding).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub clear: Option<Bound>,
+    /// `repeat every T` (level triggering), in milliseconds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeat_ms: Option<f64>,
     pub actions: Vec<Action>,
     pub span: Span,
 }

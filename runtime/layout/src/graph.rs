@@ -275,7 +275,10 @@ impl Builder {
         let eval: Arc<dyn Evaluate> = if use_jit {
             Arc::new(jit::compile(&self.functions).map_err(|e| LoadError::Compile(e.to_string()))?)
         } else {
-            Arc::new(jit::Interpreter::new(&self.functions).map_err(|e| LoadError::Compile(e.to_string()))?)
+            Arc::new(
+                jit::Interpreter::new(&self.functions)
+                    .map_err(|e| LoadError::Compile(e.to_string()))?,
+            )
         };
         *self.code.ctx.lock() = Some(eval.context());
         let _ = self.code.eval.set(eval);

@@ -37,7 +37,7 @@ pub(crate) fn compile_watch(
     };
     let mut lw = Lowerer::new(Scope::Plain, screen);
     let mut outs = vec![lw.lower(&w.when.expr, jit::Ty::Bool).map_err(err)?];
-    let clear = watch_clear(w);
+    let clear = w.clear.as_ref();
     let has_clear = clear.is_some();
     if let Some(c) = clear {
         outs.push(lw.lower(&c.expr, jit::Ty::Bool).map_err(err)?);
@@ -49,17 +49,9 @@ pub(crate) fn compile_watch(
         func,
         has_clear,
         hold: ms(w.hold_ms),
-        repeat: ms(watch_repeat_ms(w)),
+        repeat: ms(w.repeat_ms),
         actions: compile_actions(b, &w.actions, screen).map_err(err)?,
     })
-}
-
-fn watch_clear(_w: &mocu_language::program::Watch) -> Option<&mocu_language::program::Bound> {
-    None
-}
-
-fn watch_repeat_ms(_w: &mocu_language::program::Watch) -> Option<f64> {
-    None
 }
 
 pub(crate) struct WatchRt {

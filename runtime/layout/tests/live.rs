@@ -343,3 +343,61 @@ fn a_template_gives_each_discovered_vehicle_its_own_strip() {
     assert!(ds.resolve(&["display", "strip@usv1"]).is_none());
     assert_eq!(ds.get(s2, "y").unwrap(), Value::Float(20.0), "moves up when the first goes");
 }
+
+fn wait_for(what: &str, mut f: impl FnMut() -> bool) {
+    let t0 = std::time::Instant::now();
+    while !f() {
+        assert!(t0.elapsed() < Duration::from_secs(5), "timed out waiting for {what}");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+#[test]
+fn a_watch_with_clear_when_stays_active_until_the_clear_condition_holds() {
+    let ds = DataServer::default();
+    let (v, _nav) = vehicle(&ds, "usv1");
+    ds.set(v, "temp", Value::Float(50.0)).unwrap();
+    let sink = Arc::new(MemorySink::default());
+    let p = program(
+        "watch hot { when root.vehicles.usv1.temp > 90 clear when root.vehicles.usv1.temp < 70 then alert warning \"hot\" }",
+    );
+    let layout = Layout::load(&ds, &p, config(true), sink.clone()).unwrap();
+    let watch = ds.resolve(&["operator", "watches", "hot"]).unwrap();
+    for t in [95.0, 85.0, 91.0, 80.0] {
+        ds.set(v, "temp", Value::Float(t)).unwrap();
+        layout.settle();
+    }
+    assert_eq!(ds.get(watch, "state").unwrap(), Value::str("active"), "85 and 80 are in the band");
+    assert_eq!(sink.of("alert").len(), 1, "no chattering around the threshold");
+    ds.set(v, "temp", Value::Float(60.0)).unwrap();
+    layout.settle();
+    assert_eq!(ds.get(watch, "state").unwrap(), Value::str("idle"));
+    ds.set(v, "temp", Value::Float(95.0)).unwrap();
+    layout.settle();
+    wait_for("the second alert", || sink.of("alert").len() == 2);
+}
+
+#[test]
+fn a_level_triggered_watch_repeats_while_active_and_snooze_holds_it_off() {
+    let ds = DataServer::default();
+    let (v, _nav) = vehicle(&ds, "usv1");
+    ds.set(v, "link", Value::Float(1.0)).unwrap();
+    let sink = Arc::new(MemorySink::default());
+    let p = program(
+        "watch lost { when root.vehicles.usv1.link < 0.1 repeat every 40ms then alert critical \"link\" }",
+    );
+    let layout = Layout::load(&ds, &p, config(true), sink.clone()).unwrap();
+    ds.set(v, "link", Value::Float(0.0)).unwrap();
+    layout.settle();
+    wait_for("three repeats", || sink.of("alert").len() >= 3);
+    let watch = ds.resolve(&["operator", "watches", "lost"]).unwrap();
+    assert!(ds.call_wait(watch, "snooze", vec![Value::Float(300.0)], None).is_accepted());
+    let n = sink.of("alert").len();
+    std::thread::sleep(Duration::from_millis(150));
+    assert!(sink.of("alert").len() <= n + 1, "snoozed: no repeats");
+    ds.set(v, "link", Value::Float(1.0)).unwrap();
+    layout.settle();
+    let n = sink.of("alert").len();
+    std::thread::sleep(Duration::from_millis(150));
+    assert_eq!(sink.of("alert").len(), n, "cleared: repeats stop");
+}

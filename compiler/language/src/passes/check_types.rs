@@ -165,11 +165,24 @@ impl Typer<'_, '_> {
                     let b = self.expect(h, scope, &Type::DURATION, "a hold time (`for 5s`)");
                     b.expr.constant().and_then(|c| c.number())
                 });
+                let clear =
+                    w.clear.as_ref().map(|c| self.condition(c, scope, "a watch's `clear when`"));
+                let repeat_ms = w.repeat.as_ref().and_then(|r| {
+                    let b = self.expect(
+                        r,
+                        scope,
+                        &Type::DURATION,
+                        "a repeat period (`repeat every 30s`)",
+                    );
+                    b.expr.constant().and_then(|c| c.number())
+                });
                 let actions = self.actions(&w.actions, scope);
                 sink.watches.push(Watch {
                     name: w.name.name.clone(),
                     when,
                     hold_ms,
+                    clear,
+                    repeat_ms,
                     actions,
                     span: w.span,
                 });

@@ -95,8 +95,8 @@ impl Resolver<'_, '_> {
             }
             Item::Watch(w) => {
                 self.expr(&w.when, scope);
-                if let Some(h) = &w.hold {
-                    self.expr(h, scope);
+                for e in [&w.hold, &w.clear, &w.repeat].into_iter().flatten() {
+                    self.expr(e, scope);
                 }
                 self.actions(&w.actions, scope);
             }
