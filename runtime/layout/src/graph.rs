@@ -136,16 +136,17 @@ pub(crate) struct FuncInfo {
 }
 
 /// One template's compiled pieces, instantiated per matching object.
-struct TemplateRt {
+pub(crate) struct TemplateRt {
+    pub(crate) alive: bool,
     source: Vec<String>,
     object_type: Option<String>,
     var: String,
     windows: Vec<CompiledWindow>,
     widgets: Vec<CompiledWidget>,
     watches: Vec<crate::watch::CompiledWatch>,
-    source_watch: Option<PathWatch>,
+    pub(crate) source_watch: Option<PathWatch>,
     source_object: Option<Guid>,
-    children_sub: Option<mocu_dataserver::SubscriptionId>,
+    pub(crate) children_sub: Option<mocu_dataserver::SubscriptionId>,
 }
 
 pub(crate) struct Instance {
@@ -160,9 +161,9 @@ pub(crate) struct Instance {
 #[derive(Clone)]
 pub(crate) struct CompiledWindow {
     pub(crate) name: String,
-    kind: String,
-    f: FnRef,
-    source: Option<(Base, Vec<String>)>,
+    pub(crate) kind: String,
+    pub(crate) f: FnRef,
+    pub(crate) source: Option<(Base, Vec<String>)>,
 }
 
 #[derive(Clone)]
@@ -186,13 +187,15 @@ pub(crate) struct State {
     dirty: Vec<usize>,
     pub(crate) display: Guid,
     owned: Vec<Guid>,
-    templates: Vec<TemplateRt>,
+    pub(crate) templates: Vec<TemplateRt>,
     pub(crate) instances: Vec<Option<Instance>>,
     pub(crate) watches: Vec<WatchRt>,
     pub(crate) windows: HashMap<String, Guid>,
     pub(crate) bindings: Vec<(String, Vec<CompiledAction>)>,
     pub(crate) evaluations: u64,
     pub(crate) closed: bool,
+    /// The top-level items now live, for incremental reload.
+    pub(crate) items: Vec<crate::reload::ItemRec>,
 }
 
 /// Counters for tests and statistics.
@@ -287,7 +290,7 @@ impl Builder {
     }
 }
 
-fn compile_window(
+pub(crate) fn compile_window(
     b: &mut Builder,
     w: &Window,
     screen: (f64, f64),
@@ -315,7 +318,7 @@ fn compile_window(
 
 const WINDOW_OUTPUTS: [&str; 7] = ["layer", "x", "y", "w", "h", "opacity", "visible"];
 
-fn compile_widget(
+pub(crate) fn compile_widget(
     b: &mut Builder,
     w: &Widget,
     n: usize,
@@ -392,38 +395,9 @@ impl Layout {
         config: LayoutConfig,
         sink: Arc<dyn EventSink>,
     ) -> Result<Layout, LoadError> {
-        let screen = config.screen;
-        let mut b = Builder::new();
-        let windows: Vec<CompiledWindow> = program
-            .windows
-            .iter()
-            .map(|w| compile_window(&mut b, w, screen))
-            .collect::<Result<_, _>>()?;
-        let widgets: Vec<CompiledWidget> = program
-            .widgets
-            .iter()
-            .enumerate()
-            .map(|(i, w)| compile_widget(&mut b, w, i, screen))
-            .collect::<Result<_, _>>()?;
-        let watches: Vec<crate::watch::CompiledWatch> = program
-            .watches
-            .iter()
-            .map(|w| crate::watch::compile_watch(&mut b, w, screen))
-            .collect::<Result<_, _>>()?;
-        let mut templates = Vec::new();
-        for t in &program.templates {
-            templates.push(compile_template(&mut b, t, screen)?);
-        }
-        let mut bindings = Vec::new();
-        for bind in &program.bindings {
-            let acts =
-                actions::compile_actions(&mut b, &bind.actions, screen).map_err(lower_err)?;
-            bindings.push((format!("{}.{}.{}", bind.device, bind.kind, bind.input), acts));
-        }
-        b.finish(config.jit)?;
         let display = ensure_object(ds, Guid::ROOT, "display", "display")?;
-        let _ = ds.set(display, "width", Value::Float(screen.0));
-        let _ = ds.set(display, "height", Value::Float(screen.1));
+        let _ = ds.set(display, "width", Value::Float(config.screen.0));
+        let _ = ds.set(display, "height", Value::Float(config.screen.1));
         let shared = Arc::new(Shared {
             ds: ds.clone(),
             exec: ds.serial_executor(),
@@ -436,30 +410,49 @@ impl Layout {
                 dirty: Vec::new(),
                 display,
                 owned: Vec::new(),
-                templates,
+                templates: Vec::new(),
                 instances: Vec::new(),
                 watches: Vec::new(),
                 windows: HashMap::new(),
-                bindings,
+                bindings: Vec::new(),
                 evaluations: 0,
                 closed: false,
+                items: Vec::new(),
             }),
             inbox: Mutex::new(Inbox::default()),
         });
         {
             let mut st = shared.state.lock();
-            let order = Shared::publish_windows(&shared, &mut st, &windows, None, 0)?;
-            Shared::publish_widgets(&shared, &mut st, &widgets, None)?;
-            for w in watches {
-                Shared::add_watch(&shared, &mut st, w, None);
-            }
-            let _ = order;
-            crate::actions::publish_bindings(&shared, &mut st);
-            Shared::start_templates(&shared, &mut st);
+            shared.apply(&mut st, program)?;
             shared.evaluate(&mut st);
         }
         shared.sink.record("load", &[("layout", Value::str(&shared.config.name))]);
         Ok(Layout { shared })
+    }
+
+    /// Replaces the running program by `program`, incrementally: windows, widgets, watches
+    /// and templates whose definitions did not change keep their objects, subscriptions and
+    /// state (an animation in flight, a watch's hold timer, feedback); changed ones are
+    /// republished, removed ones torn down. The world model's vehicles, goals and routes are
+    /// never touched. On error nothing changes.
+    pub fn reload(&self, program: &Program) -> Result<crate::reload::ReloadStats, LoadError> {
+        let stats = {
+            let mut st = self.shared.state.lock();
+            let stats = self.shared.apply(&mut st, program)?;
+            self.shared.evaluate(&mut st);
+            stats
+        };
+        self.shared.sink.record(
+            "reload",
+            &[
+                ("layout", Value::str(&self.shared.config.name)),
+                ("kept", Value::Int(stats.kept as i64)),
+                ("added", Value::Int(stats.added as i64)),
+                ("changed", Value::Int(stats.changed as i64)),
+                ("removed", Value::Int(stats.removed as i64)),
+            ],
+        );
+        Ok(stats)
     }
 
     /// Applies pending changes and evaluates now (tests; `mocu run` relies on ticks).
@@ -526,7 +519,7 @@ impl Drop for Layout {
     }
 }
 
-fn compile_template(
+pub(crate) fn compile_template(
     b: &mut Builder,
     t: &Template,
     screen: (f64, f64),
@@ -551,6 +544,7 @@ fn compile_template(
         )));
     }
     Ok(TemplateRt {
+        alive: true,
         source: t.source.segments.clone(),
         object_type: t.object_type.clone(),
         var: t.var.clone(),
@@ -605,7 +599,7 @@ impl Shared {
             Base::Var(_) => {
                 instance.and_then(|i| st.instances[i].as_ref()).map(|i| Start::Object(i.object))
             }
-            Base::SelfObject => None,
+            Base::SelfObject | Base::Selected => None,
         }
     }
 
@@ -697,7 +691,7 @@ impl Shared {
     }
 
     /// Ends a cell: it stops being evaluated and releases its paths.
-    fn remove_cell(&self, st: &mut State, idx: usize) {
+    pub(crate) fn remove_cell(&self, st: &mut State, idx: usize) {
         let inputs = std::mem::take(&mut st.cells[idx].inputs);
         st.cells[idx].alive = false;
         for (input, _) in inputs {
@@ -735,6 +729,8 @@ impl Shared {
                         }
                     }
                 }
+                InboxEvent::TemplateSource(t, _) | InboxEvent::TemplateChild(t, ..)
+                    if !st.templates[t].alive => {}
                 InboxEvent::TemplateSource(t, obj) => self.template_source(&mut st, t, obj),
                 InboxEvent::TemplateChild(t, kind, g, ty) => {
                     self.template_child(&mut st, t, kind, g, &ty)
@@ -745,7 +741,7 @@ impl Shared {
     }
 
     /// Evaluates every dirty cell once; writes only outputs that changed (early cutoff).
-    fn evaluate(self: &Arc<Self>, st: &mut State) {
+    pub(crate) fn evaluate(self: &Arc<Self>, st: &mut State) {
         let dirty = std::mem::take(&mut st.dirty);
         let mut slots = Vec::new();
         let mut outs = Vec::new();
@@ -784,12 +780,12 @@ impl Shared {
                 }
                 st.cells[c].last[i] = v.clone();
                 let target = st.cells[c].targets[i].clone();
-                self.apply(st, target, v);
+                self.write_output(st, target, v);
             }
         }
     }
 
-    fn apply(self: &Arc<Self>, st: &mut State, target: Target, v: Option<Value>) {
+    fn write_output(self: &Arc<Self>, st: &mut State, target: Target, v: Option<Value>) {
         match target {
             Target::Prop(obj, name) => {
                 let _ = match v {
@@ -804,13 +800,14 @@ impl Shared {
         }
     }
 
-    fn publish_windows(
+    pub(crate) fn publish_windows(
         self: &Arc<Self>,
         st: &mut State,
         windows: &[CompiledWindow],
         instance: Option<usize>,
         first_order: usize,
-    ) -> Result<usize, LoadError> {
+    ) -> Result<Vec<(Guid, usize)>, LoadError> {
+        let mut made = Vec::new();
         let suffix = instance
             .and_then(|i| st.instances[i].as_ref())
             .map(|i| self.ds.info(i.object).map(|inf| inf.name.to_string()).unwrap_or_default());
@@ -841,6 +838,7 @@ impl Shared {
             let targets =
                 WINDOW_OUTPUTS.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
             let cell = self.add_cell(st, &w.f, targets, instance);
+            made.push((g, cell));
             st.windows.insert(name.clone(), g);
             match instance {
                 Some(i) => {
@@ -852,19 +850,48 @@ impl Shared {
                 None => st.owned.push(g),
             }
         }
-        Ok(order)
+        Ok(made)
     }
 
-    fn publish_widgets(
+    /// A changed top-level window keeps its object (and the widgets in it): new kind,
+    /// source and cell.
+    pub(crate) fn rebind_window(
+        self: &Arc<Self>,
+        st: &mut State,
+        g: Guid,
+        w: &CompiledWindow,
+    ) -> usize {
+        let kind = if w.kind == "layer" { "widgets" } else { w.kind.as_str() };
+        if let Ok(info) = self.ds.info(g)
+            && &*info.subtype != kind
+        {
+            let _ = self.ds.set_info(g, ObjectInfo::new(&info.name, "window").subtype(kind));
+        }
+        match &w.source {
+            Some((_, objs)) => {
+                let _ = self.ds.set(g, "source", Value::str(&format!("root.{}", objs.join("."))));
+            }
+            None => {
+                let _ = self.ds.delete_property(g, "source");
+            }
+        }
+        let targets = WINDOW_OUTPUTS.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
+        self.add_cell(st, &w.f, targets, None)
+    }
+
+    pub(crate) fn publish_widgets(
         self: &Arc<Self>,
         st: &mut State,
         widgets: &[CompiledWidget],
         instance: Option<usize>,
-    ) -> Result<(), LoadError> {
+        first_order: usize,
+    ) -> Result<Vec<(Guid, usize)>, LoadError> {
+        let mut made = Vec::new();
         let suffix = instance
             .and_then(|i| st.instances[i].as_ref())
             .map(|i| self.ds.info(i.object).map(|inf| inf.name.to_string()).unwrap_or_default());
-        for (order, w) in widgets.iter().enumerate() {
+        for (i, w) in widgets.iter().enumerate() {
+            let order = first_order + i;
             let window_name = match &suffix {
                 Some(s) if st.windows.contains_key(&format!("{}@{s}", w.window)) => {
                     format!("{}@{s}", w.window)
@@ -899,6 +926,7 @@ impl Shared {
             }
             let targets = w.outputs.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
             let cell = self.add_cell(st, &w.f, targets, instance);
+            made.push((g, cell));
             let object = instance.and_then(|i| st.instances[i].as_ref()).map(|i| i.object);
             actions::publish_handlers(self, g, &w.handlers, object);
             if let Some(i) = instance
@@ -907,35 +935,50 @@ impl Shared {
                 inst.cells.push(cell);
             }
         }
-        Ok(())
+        Ok(made)
     }
 
-    fn add_watch(
+    pub(crate) fn add_watch(
         self: &Arc<Self>,
         st: &mut State,
         w: crate::watch::CompiledWatch,
         instance: Option<usize>,
-    ) {
+    ) -> usize {
         let idx = crate::watch::publish_watch(self, st, w, instance);
         if let Some(i) = instance
             && let Some(inst) = st.instances[i].as_mut()
         {
             inst.watches.push(idx);
         }
+        idx
     }
 
-    fn start_templates(self: &Arc<Self>, st: &mut State) {
-        for t in 0..st.templates.len() {
-            let objs: Vec<&str> = st.templates[t].source.iter().map(|s| s.as_str()).collect();
-            let weak = self.weak();
-            let watch =
-                self.ds.watch_object(Guid::ROOT, &objs, Some(&self.exec), move |e: &PathEvent| {
-                    if let Some(sh) = weak.upgrade() {
-                        let obj = (e.kind != Kind::Deleted).then_some(e.object);
-                        sh.post(InboxEvent::TemplateSource(t, obj));
-                    }
-                });
-            st.templates[t].source_watch = watch.ok();
+    /// Starts following template `t`'s source object.
+    pub(crate) fn start_template(self: &Arc<Self>, st: &mut State, t: usize) {
+        let objs: Vec<&str> = st.templates[t].source.iter().map(|s| s.as_str()).collect();
+        let weak = self.weak();
+        let watch =
+            self.ds.watch_object(Guid::ROOT, &objs, Some(&self.exec), move |e: &PathEvent| {
+                if let Some(sh) = weak.upgrade() {
+                    let obj = (e.kind != Kind::Deleted).then_some(e.object);
+                    sh.post(InboxEvent::TemplateSource(t, obj));
+                }
+            });
+        st.templates[t].source_watch = watch.ok();
+    }
+
+    /// Ends template `t`: its instances go, it follows nothing any more.
+    pub(crate) fn stop_template(self: &Arc<Self>, st: &mut State, t: usize) {
+        st.templates[t].alive = false;
+        st.templates[t].source_watch = None;
+        if let Some(id) = st.templates[t].children_sub.take() {
+            self.ds.unsubscribe(id);
+        }
+        let old: Vec<usize> = (0..st.instances.len())
+            .filter(|&i| st.instances[i].as_ref().is_some_and(|x| x.template == t))
+            .collect();
+        for i in old {
+            self.remove_instance(st, i);
         }
     }
 
@@ -1005,6 +1048,7 @@ impl Shared {
         let tpl = std::mem::replace(
             &mut st.templates[t],
             TemplateRt {
+                alive: true,
                 source: vec![],
                 object_type: None,
                 var: String::new(),
@@ -1018,7 +1062,7 @@ impl Shared {
         );
         let r = self
             .publish_windows(st, &tpl.windows, Some(idx), 1000)
-            .and_then(|_| self.publish_widgets(st, &tpl.widgets, Some(idx)));
+            .and_then(|_| self.publish_widgets(st, &tpl.widgets, Some(idx), 0));
         if let Err(e) = r {
             self.sink.record("diagnostic", &[("message", Value::str(&e.to_string()))]);
         }
@@ -1108,6 +1152,7 @@ pub(crate) fn eval_once(
                     Base::Root => Some(Guid::ROOT),
                     Base::Var(_) => instance_object,
                     Base::SelfObject => self_obj,
+                    Base::Selected => actions::selected_object(&sh.ds),
                 };
                 let v = start
                     .and_then(|s| resolve(&sh.ds, s, objects))

@@ -16,7 +16,9 @@ mod convert;
 pub mod events;
 pub mod graph;
 pub mod lower;
+mod reload;
 mod watch;
 
 pub use events::{EventSink, JsonlLog, MemorySink, NullSink};
 pub use graph::{Layout, LayoutConfig, LayoutStats, LoadError};
+pub use reload::ReloadStats;

@@ -132,11 +132,16 @@ pub(crate) fn publish_watch(
 
 pub(crate) fn remove_watch(sh: &Arc<Shared>, st: &mut State, w: usize) {
     let rt = &mut st.watches[w];
+    if !rt.alive {
+        return;
+    }
     rt.alive = false;
     rt.generation += 1;
+    let cell = rt.cell;
     if let Some(o) = rt.object.take() {
         let _ = sh.ds.delete_object(o);
     }
+    sh.remove_cell(st, cell);
 }
 
 fn set_state(sh: &Shared, rt: &WatchRt, state: &str) {
