@@ -54,7 +54,7 @@ pub struct WidgetRenderer {
 
 struct Shared {
     ds: DataServer,
-    lib: Library,
+    lib: Mutex<Arc<Library>>,
     exec: Executor,
     config: RendererConfig,
     state: Mutex<State>,
@@ -92,7 +92,7 @@ impl WidgetRenderer {
             mocu_display::ensure_display_object(ds, 1920, 1080).map_err(|e| e.to_string())?;
         let shared = Arc::new(Shared {
             ds: ds.clone(),
-            lib,
+            lib: Mutex::new(Arc::new(lib)),
             exec: ds.serial_executor(),
             config,
             state: Mutex::default(),
@@ -107,6 +107,17 @@ impl WidgetRenderer {
             .map_err(|e| e.to_string())?;
         shared.state.lock().display_sub = Some(sub);
         Ok(WidgetRenderer { shared })
+    }
+}
+
+impl WidgetRenderer {
+    /// Swaps in newly compiled components (a reloaded layout) and repaints every window.
+    pub fn replace_library(&self, lib: Library) {
+        *self.shared.lib.lock() = Arc::new(lib);
+        let windows: Vec<Guid> = self.shared.state.lock().windows.keys().copied().collect();
+        for w in windows {
+            let _ = invalidate(&self.shared.ds, w);
+        }
     }
 }
 
@@ -393,9 +404,10 @@ impl Shared {
             let component = props.get("component").and_then(Value::as_str).unwrap_or("");
             c.save();
             c.translate(x, y);
-            if let Some(comp) = self.lib.components.get(component) {
+            let lib = self.lib.lock().clone();
+            if let Some(comp) = lib.components.get(component) {
                 let prop = |name: &str| props.get(name).cloned();
-                let outs = self.lib.evaluate(comp, &prop);
+                let outs = lib.evaluate(comp, &prop);
                 draw_shapes(c, &comp.shapes, &outs);
             } else {
                 draw_native(c, component, &props, bounds);
