@@ -1,0 +1,335 @@
+//! Decoders: JPEG with zune-jpeg, H.264 with openh264 (Cisco's decoder, built from the
+//! sources the `openh264` crate bundles — no download, no system library).
+//!
+//! A decoder joins a camera's `encoded` listener (dropping the oldest unit when it falls
+//! behind) and sends RGBA8 frames on the camera listener itself. [`attach_decoder`] does it
+//! for one camera; the `codec` module kind does it for a camera named in a profile.
+
+use crate::frame::{EncodedUnit, FrameMsg};
+use crate::{now_us, resolve_path};
+use mocu_dataserver::{
+    Call, DataServer, DsError, Executor, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Value,
+    ValueKind,
+};
+use mocu_host::{Module, ModuleContext, ModuleSpec};
+use openh264::formats::YUVSource;
+use parking_lot::Mutex;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// The codecs a receiver can hand on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Codec {
+    Jpeg,
+    H264,
+}
+
+impl Codec {
+    pub fn name(self) -> &'static str {
+        match self {
+            Codec::Jpeg => "jpeg",
+            Codec::H264 => "h264",
+        }
+    }
+
+    pub fn parse(s: &str) -> Option<Codec> {
+        match s {
+            "jpeg" | "mjpeg" => Some(Codec::Jpeg),
+            "h264" => Some(Codec::H264),
+            _ => None,
+        }
+    }
+}
+
+/// One decoded picture: RGBA8 rows.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DecodedFrame {
+    pub rgba: Vec<u8>,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl DecodedFrame {
+    /// The pixel at (x, y) as RGB.
+    pub fn rgb_at(&self, x: u32, y: u32) -> [u8; 3] {
+        let i = (y as usize * self.width as usize + x as usize) * 4;
+        [self.rgba[i], self.rgba[i + 1], self.rgba[i + 2]]
+    }
+}
+
+/// A decoder for one stream (it keeps the H.264 decoder's reference pictures).
+#[derive(Default)]
+pub struct Decoder {
+    h264: Option<openh264::decoder::Decoder>,
+}
+
+impl Decoder {
+    pub fn new() -> Decoder {
+        Decoder::default()
+    }
+
+    /// Decodes one unit: a JPEG file, or an H.264 access unit (Annex B). `Ok(None)` when
+    /// the unit gave no picture (parameter sets only).
+    pub fn decode(&mut self, codec: Codec, data: &[u8]) -> Result<Option<DecodedFrame>, String> {
+        match codec {
+            Codec::Jpeg => decode_jpeg(data).map(Some),
+            Codec::H264 => {
+                if self.h264.is_none() {
+                    self.h264 = Some(openh264::decoder::Decoder::new().map_err(|e| e.to_string())?);
+                }
+                let d = self.h264.as_mut().expect("made above");
+                match d.decode(data) {
+                    Ok(Some(yuv)) => {
+                        let (w, h) = yuv.dimensions();
+                        let mut rgba = vec![0u8; w * h * 4];
+                        yuv.write_rgba8(&mut rgba);
+                        Ok(Some(DecodedFrame { rgba, width: w as u32, height: h as u32 }))
+                    }
+                    Ok(None) => Ok(None),
+                    Err(e) => Err(e.to_string()),
+                }
+            }
+        }
+    }
+}
+
+/// Decodes a JPEG file to RGBA8 with zune-jpeg.
+pub fn decode_jpeg(data: &[u8]) -> Result<DecodedFrame, String> {
+    use zune_jpeg::zune_core::bytestream::ZCursor;
+    use zune_jpeg::zune_core::colorspace::ColorSpace;
+    use zune_jpeg::zune_core::options::DecoderOptions;
+    let opts = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGBA);
+    let mut d = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(data), opts);
+    let rgba = d.decode().map_err(|e| e.to_string())?;
+    let (w, h) = d.dimensions().ok_or("no dimensions")?;
+    if rgba.len() != w * h * 4 {
+        return Err(format!("decoded {} bytes for {w}x{h}", rgba.len()));
+    }
+    Ok(DecodedFrame { rgba, width: w as u32, height: h as u32 })
+}
+
+/// How many encoded units may wait for the decoder before the oldest is dropped.
+pub const ENCODED_QUEUE: usize = 8;
+
+/// A decoder attached to one camera; detaches when dropped.
+pub struct DecoderHandle {
+    ds: DataServer,
+    object: Guid,
+    assoc: Guid,
+}
+
+impl Drop for DecoderHandle {
+    fn drop(&mut self) {
+        let _ = self.ds.leave(self.assoc);
+        let _ = self.ds.delete_object(self.object);
+    }
+}
+
+struct DecodeState {
+    decoder: Decoder,
+    frames: i64,
+    errors: i64,
+    size: (u32, u32),
+    codec: Option<Codec>,
+    meter: Meter,
+    last_latency_ms: f64,
+    last_frame_us: i64,
+}
+
+/// Frames per second over windows of about 250 ms, and when to publish statistics.
+#[derive(Debug)]
+pub(crate) struct Meter {
+    since: Instant,
+    count: u32,
+    pub(crate) fps: f64,
+}
+
+impl Default for Meter {
+    fn default() -> Meter {
+        Meter { since: Instant::now(), count: 0, fps: 0.0 }
+    }
+}
+
+impl Meter {
+    pub(crate) const PERIOD: Duration = Duration::from_millis(250);
+
+    /// Counts one event; true when a period ended (publish now).
+    pub(crate) fn tick(&mut self, events: u32) -> bool {
+        self.count += events;
+        let dt = self.since.elapsed();
+        if dt >= Self::PERIOD {
+            self.fps = self.count as f64 / dt.as_secs_f64();
+            self.count = 0;
+            self.since = Instant::now();
+            true
+        } else {
+            false
+        }
+    }
+}
+
+/// Joins `encoded` (a listener of [`EncodedUnit`]s) with a decoder that sends RGBA8
+/// [`FrameMsg`]s on `camera` and keeps the camera's statistics (`width`, `height`,
+/// `frames`, `fps`, `dropped`, `latency_ms`, `codec`, `decode_errors`, `last_frame_us`).
+/// The decoder runs on `executor`.
+pub fn attach_decoder(
+    ds: &DataServer,
+    executor: &Executor,
+    camera: Guid,
+    encoded: Guid,
+) -> Result<DecoderHandle, DsError> {
+    if let Some(old) = ds.find_child(camera, "decoder")? {
+        ds.delete_object(old)?;
+    }
+    let object = ds.create_object(camera, ObjectInfo::new("decoder", "codec"))?;
+    let state = Arc::new(Mutex::new(DecodeState {
+        decoder: Decoder::new(),
+        frames: 0,
+        errors: 0,
+        size: (0, 0),
+        codec: None,
+        meter: Meter::default(),
+        last_latency_ms: 0.0,
+        last_frame_us: 0,
+    }));
+    let spec = MethodSpec::new("unit")
+        .param(ParamSpec::new("data", ValueKind::Bytes))
+        .param(ParamSpec::new("codec", ValueKind::String))
+        .param(ParamSpec::new("unit", ValueKind::Int))
+        .param(ParamSpec::new("arrival_us", ValueKind::Int))
+        .describe("Decodes one encoded unit and sends the picture on the camera");
+    let ds2 = ds.clone();
+    let assoc_slot: Arc<Mutex<Option<Guid>>> = Arc::default();
+    let slot2 = assoc_slot.clone();
+    ds.publish_method_on(executor, object, spec, move |call: Call| {
+        if let Some(u) = EncodedUnit::from_values(&call.args) {
+            let assoc = *slot2.lock();
+            on_unit(&ds2, camera, assoc, &state, &u);
+        }
+        call.responder.accept(vec![]);
+    })?;
+    let assoc = ds.join(encoded, object, "unit", Overflow::DropOldest, ENCODED_QUEUE)?;
+    *assoc_slot.lock() = Some(assoc);
+    Ok(DecoderHandle { ds: ds.clone(), object, assoc })
+}
+
+fn on_unit(
+    ds: &DataServer,
+    camera: Guid,
+    assoc: Option<Guid>,
+    state: &Mutex<DecodeState>,
+    u: &EncodedUnit,
+) {
+    let mut st = state.lock();
+    let Some(codec) = Codec::parse(&u.codec) else {
+        st.errors += 1;
+        return;
+    };
+    if st.codec != Some(codec) {
+        st.codec = Some(codec);
+        st.decoder = Decoder::new();
+        let _ = ds.set(camera, "codec", Value::str(codec.name()));
+    }
+    let mut shown = 0;
+    match st.decoder.decode(codec, &u.data) {
+        Ok(Some(f)) => {
+            st.frames += 1;
+            shown = 1;
+            let (w, h) = (f.width, f.height);
+            let msg = FrameMsg {
+                pixels: f.rgba.into(),
+                width: w,
+                height: h,
+                frame: st.frames,
+                arrival_us: Some(u.arrival_us),
+            };
+            let _ = ds.send(camera, msg.to_values());
+            let now = now_us();
+            st.last_latency_ms = (now - u.arrival_us) as f64 / 1000.0;
+            st.last_frame_us = now;
+            if st.size != (w, h) {
+                st.size = (w, h);
+                let _ = ds.set(camera, "width", Value::Int(w as i64));
+                let _ = ds.set(camera, "height", Value::Int(h as i64));
+            }
+        }
+        Ok(None) => {}
+        Err(_) => st.errors += 1,
+    }
+    let first = st.frames == 1 && shown == 1;
+    if st.meter.tick(shown) || first {
+        let queue_dropped = assoc
+            .and_then(|a| ds.try_get(a, "dropped".into()))
+            .and_then(|v| v.as_i64())
+            .unwrap_or(0);
+        let network =
+            ds.try_get(camera, "dropped_network".into()).and_then(|v| v.as_i64()).unwrap_or(0);
+        for (k, v) in [
+            ("frames", Value::Int(st.frames)),
+            ("fps", Value::Float((st.meter.fps * 10.0).round() / 10.0)),
+            ("dropped", Value::Int(queue_dropped + network + st.errors)),
+            ("decode_errors", Value::Int(st.errors)),
+            ("latency_ms", Value::Float((st.last_latency_ms * 10.0).round() / 10.0)),
+            ("last_frame_us", Value::Int(st.last_frame_us)),
+        ] {
+            let _ = ds.set(camera, k, v);
+        }
+    }
+}
+
+/// The `codec` module kind: a decoder for the camera at `source` (a dotted path text such
+/// as `root.cameras.front`), whose receiver publishes `encoded` but does not decode.
+pub struct CodecModule {
+    source: String,
+    handle: Arc<Mutex<Option<DecoderHandle>>>,
+    stopped: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl CodecModule {
+    pub fn from_spec(spec: &ModuleSpec) -> Result<CodecModule, String> {
+        let source = spec.str_or("source", "").map_err(|e| e.to_string())?;
+        if source.is_empty() {
+            return Err(format!("module `{}`: `source` (a camera path) is required", spec.name));
+        }
+        Ok(CodecModule { source, handle: Arc::default(), stopped: Arc::default() })
+    }
+}
+
+impl Module for CodecModule {
+    fn start(&mut self, ctx: &ModuleContext) -> Result<(), String> {
+        try_attach(ctx.clone(), self.source.clone(), self.handle.clone(), self.stopped.clone());
+        Ok(())
+    }
+
+    fn stop(&mut self) {
+        self.stopped.store(true, std::sync::atomic::Ordering::SeqCst);
+        self.handle.lock().take();
+    }
+}
+
+/// Attaches when the camera and its `encoded` listener exist; until then, looks again
+/// twice a second.
+fn try_attach(
+    ctx: ModuleContext,
+    source: String,
+    handle: Arc<Mutex<Option<DecoderHandle>>>,
+    stopped: Arc<std::sync::atomic::AtomicBool>,
+) {
+    if stopped.load(std::sync::atomic::Ordering::SeqCst) {
+        return;
+    }
+    let ds = &ctx.ds;
+    let cam = resolve_path(ds, &source);
+    let enc = cam.and_then(|c| ds.find_child(c, "encoded").ok().flatten());
+    if let (Some(c), Some(e)) = (cam, enc)
+        && let Ok(h) = attach_decoder(ds, &ctx.executor, c, e)
+    {
+        *handle.lock() = Some(h);
+        let _ = ds.set(ctx.status, "camera", Value::str(&source));
+        return;
+    }
+    let ctx2 = ctx.clone();
+    ctx.ds.run_after(Duration::from_millis(500), Some(&ctx.executor), move || {
+        try_attach(ctx2, source, handle, stopped)
+    });
+}

@@ -1,0 +1,363 @@
+//! RTP (RFC 3550) packets and the H.264 depacketizer (RFC 6184: single NAL unit, STAP-A,
+//! FU-A; non-interleaved mode, which is what ffmpeg, GStreamer and cameras send).
+
+/// One parsed RTP packet, borrowing the datagram.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RtpPacket<'a> {
+    pub marker: bool,
+    pub payload_type: u8,
+    pub sequence: u16,
+    pub timestamp: u32,
+    pub ssrc: u32,
+    pub payload: &'a [u8],
+}
+
+impl<'a> RtpPacket<'a> {
+    /// Parses a datagram as RTP version 2 (CSRCs, header extension and padding removed).
+    /// `None` when it is not one.
+    pub fn parse(d: &'a [u8]) -> Option<RtpPacket<'a>> {
+        if d.len() < 12 || d[0] >> 6 != 2 {
+            return None;
+        }
+        let cc = (d[0] & 0x0f) as usize;
+        let mut start = 12 + cc * 4;
+        if d[0] & 0x10 != 0 {
+            let ext = d.get(start + 2..start + 4)?;
+            start += 4 + u16::from_be_bytes([ext[0], ext[1]]) as usize * 4;
+        }
+        let mut end = d.len();
+        if d[0] & 0x20 != 0 {
+            let pad = *d.last()? as usize;
+            end = end.checked_sub(pad)?;
+        }
+        if start > end {
+            return None;
+        }
+        Some(RtpPacket {
+            marker: d[1] & 0x80 != 0,
+            payload_type: d[1] & 0x7f,
+            sequence: u16::from_be_bytes([d[2], d[3]]),
+            timestamp: u32::from_be_bytes([d[4], d[5], d[6], d[7]]),
+            ssrc: u32::from_be_bytes([d[8], d[9], d[10], d[11]]),
+            payload: &d[start..end],
+        })
+    }
+}
+
+/// The RTP payload type of JPEG (RFC 3551's static assignment).
+pub const PT_JPEG: u8 = 26;
+
+/// Whether an RTP payload plausibly starts an H.264 packet (RFC 6184): forbidden bit clear,
+/// NAL type 1–23 (single), 24 (STAP-A) or 28 (FU-A).
+pub fn looks_like_h264(payload: &[u8]) -> bool {
+    match payload.first() {
+        Some(&b) => b & 0x80 == 0 && matches!(b & 0x1f, 1..=24 | 28),
+        None => false,
+    }
+}
+
+/// Counts kept by a depacketizer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DepackStats {
+    /// Packets missing from the sequence (gaps in sequence numbers).
+    pub lost_packets: u64,
+    /// Units (frames) thrown away because a packet of theirs was lost or malformed.
+    pub dropped_units: u64,
+    /// Packets of kinds this depacketizer does not handle (STAP-B, MTAP, FU-B).
+    pub unsupported: u64,
+}
+
+/// One complete unit out of a depacketizer.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Unit {
+    pub data: Vec<u8>,
+    pub timestamp: u32,
+    /// H.264: contains an IDR slice or a sequence parameter set.
+    pub key: bool,
+}
+
+/// Sequence-number tracking shared by the depacketizers: reports a gap.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct SeqTracker {
+    last: Option<(u32, u16)>,
+}
+
+impl SeqTracker {
+    /// Returns how many packets are missing before this one (0 when in order). A new SSRC
+    /// starts afresh; a duplicate or reordered (older) packet reports `None`.
+    pub(crate) fn next(&mut self, ssrc: u32, seq: u16) -> Option<u64> {
+        let r = match self.last {
+            Some((s, last)) if s == ssrc => {
+                let d = seq.wrapping_sub(last);
+                if d == 0 || d > 0x8000 {
+                    return None;
+                }
+                (d - 1) as u64
+            }
+            _ => 0,
+        };
+        self.last = Some((ssrc, seq));
+        Some(r)
+    }
+}
+
+const START: [u8; 4] = [0, 0, 0, 1];
+
+/// Rebuilds H.264 access units (Annex B, a start code before each NAL unit) from RTP.
+///
+/// A unit ends at the marker bit, or when the timestamp changes. A lost packet throws away
+/// the unit it belonged to (counted in `dropped_units`); the decoder conceals the rest. No
+/// unit is emitted before the first one that carries a sequence parameter set (a decoder
+/// can do nothing without it).
+#[derive(Debug, Default)]
+pub struct H264Depacketizer {
+    seq: SeqTracker,
+    au: Vec<u8>,
+    ts: Option<u32>,
+    key: bool,
+    broken: bool,
+    in_fu: bool,
+    seen_sps: bool,
+    pub stats: DepackStats,
+}
+
+impl H264Depacketizer {
+    pub fn new() -> H264Depacketizer {
+        H264Depacketizer::default()
+    }
+
+    /// Feeds one packet; `emit` gets each completed access unit.
+    pub fn push(&mut self, p: &RtpPacket, emit: &mut dyn FnMut(Unit)) {
+        let Some(gap) = self.seq.next(p.ssrc, p.sequence) else { return };
+        if self.ts.is_some_and(|t| t != p.timestamp) {
+            self.flush(emit);
+        }
+        if gap > 0 {
+            self.stats.lost_packets += gap;
+            if !self.au.is_empty() || self.in_fu {
+                self.broken = true;
+            }
+            self.in_fu = false;
+        }
+        self.ts = Some(p.timestamp);
+        self.payload(p.payload);
+        if p.marker {
+            self.flush(emit);
+        }
+    }
+
+    fn nal(&mut self, nal: &[u8]) {
+        if nal.is_empty() {
+            self.broken = true;
+            return;
+        }
+        let t = nal[0] & 0x1f;
+        self.key |= t == 5 || t == 7;
+        self.seen_sps |= t == 7;
+        self.au.extend_from_slice(&START);
+        self.au.extend_from_slice(nal);
+    }
+
+    fn payload(&mut self, pl: &[u8]) {
+        let Some(&h) = pl.first() else {
+            self.broken = true;
+            return;
+        };
+        match h & 0x1f {
+            1..=23 => {
+                self.in_fu = false;
+                self.nal(pl);
+            }
+            24 => {
+                self.in_fu = false;
+                let mut rest = &pl[1..];
+                while rest.len() >= 2 {
+                    let n = u16::from_be_bytes([rest[0], rest[1]]) as usize;
+                    if rest.len() < 2 + n {
+                        self.broken = true;
+                        return;
+                    }
+                    self.nal(&rest[2..2 + n]);
+                    rest = &rest[2 + n..];
+                }
+            }
+            28 => {
+                let Some(&fu) = pl.get(1) else {
+                    self.broken = true;
+                    return;
+                };
+                let (start, end) = (fu & 0x80 != 0, fu & 0x40 != 0);
+                if start {
+                    self.in_fu = true;
+                    let header = (h & 0xe0) | (fu & 0x1f);
+                    let mut first = Vec::with_capacity(pl.len() - 1);
+                    first.push(header);
+                    first.extend_from_slice(&pl[2..]);
+                    self.nal(&first);
+                } else if self.in_fu {
+                    self.au.extend_from_slice(&pl[2..]);
+                } else {
+                    // A middle or end fragment whose start we never saw.
+                    self.broken = true;
+                }
+                if end {
+                    self.in_fu = false;
+                }
+            }
+            _ => {
+                self.stats.unsupported += 1;
+                self.broken = true;
+            }
+        }
+    }
+
+    fn flush(&mut self, emit: &mut dyn FnMut(Unit)) {
+        let au = std::mem::take(&mut self.au);
+        let (broken, key) = (self.broken || self.in_fu, self.key);
+        self.broken = false;
+        self.key = false;
+        self.in_fu = false;
+        let ts = self.ts.take();
+        if au.is_empty() {
+            return;
+        }
+        if broken {
+            self.stats.dropped_units += 1;
+        } else if self.seen_sps {
+            emit(Unit { data: au, timestamp: ts.unwrap_or(0), key });
+        }
+    }
+}
+
+/// Splits an Annex B byte stream into NAL units (without start codes). For tests and
+/// for packetizing.
+pub fn annexb_nals(data: &[u8]) -> Vec<&[u8]> {
+    let mut starts = Vec::new();
+    let mut i = 0;
+    while i + 3 <= data.len() {
+        if data[i] == 0 && data[i + 1] == 0 && data[i + 2] == 1 {
+            starts.push((i, i + 3));
+            i += 3;
+        } else {
+            i += 1;
+        }
+    }
+    let mut out = Vec::new();
+    for (k, &(_, s)) in starts.iter().enumerate() {
+        let mut e = starts.get(k + 1).map(|n| n.0).unwrap_or(data.len());
+        while e > s && data[e - 1] == 0 && k + 1 < starts.len() {
+            e -= 1;
+        }
+        out.push(&data[s..e]);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pkt(seq: u16, ts: u32, marker: bool, payload: &[u8]) -> Vec<u8> {
+        let mut d = vec![0x80, if marker { 0xe0 } else { 0x60 }];
+        d.extend_from_slice(&seq.to_be_bytes());
+        d.extend_from_slice(&ts.to_be_bytes());
+        d.extend_from_slice(&7u32.to_be_bytes());
+        d.extend_from_slice(payload);
+        d
+    }
+
+    fn run(packets: &[Vec<u8>]) -> (Vec<Unit>, DepackStats) {
+        let mut d = H264Depacketizer::new();
+        let mut out = Vec::new();
+        for p in packets {
+            d.push(&RtpPacket::parse(p).unwrap(), &mut |u| out.push(u));
+        }
+        (out, d.stats)
+    }
+
+    const SPS: &[u8] = &[0x67, 1, 2, 3];
+    const PPS: &[u8] = &[0x68, 4];
+
+    fn stap(nals: &[&[u8]]) -> Vec<u8> {
+        let mut v = vec![0x78];
+        for n in nals {
+            v.extend_from_slice(&(n.len() as u16).to_be_bytes());
+            v.extend_from_slice(n);
+        }
+        v
+    }
+
+    #[test]
+    fn parses_header_with_csrc_extension_and_padding() {
+        let mut d = vec![0xb1, 0x9a, 0, 5, 0, 0, 0, 9, 0, 0, 0, 1];
+        d.extend_from_slice(&[0xde, 0xad, 0xbe, 0xef]); // one CSRC
+        d.extend_from_slice(&[0xbe, 0xde, 0, 1, 1, 2, 3, 4]); // extension, one word
+        d.extend_from_slice(&[0x65, 0x88]);
+        d.extend_from_slice(&[0, 0, 3]); // padding
+        let p = RtpPacket::parse(&d).unwrap();
+        assert_eq!((p.marker, p.payload_type, p.sequence, p.timestamp), (true, 26, 5, 9));
+        assert_eq!(p.payload, &[0x65, 0x88]);
+        assert!(RtpPacket::parse(&[0xff, 0xd8, 0xff, 0xe0, 0, 0, 0, 0, 0, 0, 0, 0]).is_none());
+    }
+
+    #[test]
+    fn stap_a_single_and_fu_a_make_one_access_unit() {
+        let idr_a = [0x65u8, 10, 11, 12];
+        let packets = vec![
+            pkt(1, 100, false, &stap(&[SPS, PPS])),
+            pkt(2, 100, false, &[0x7c, 0x85, 10, 11]), // FU-A start, type 5
+            pkt(3, 100, false, &[0x7c, 0x05, 12]),
+            pkt(4, 100, true, &[0x7c, 0x45, 13]), // end
+            pkt(5, 200, true, &[0x41, 9, 9]),     // single NAL, P slice
+        ];
+        let (units, stats) = run(&packets);
+        assert_eq!(units.len(), 2);
+        assert!(units[0].key && !units[1].key);
+        let nals = annexb_nals(&units[0].data);
+        assert_eq!(nals, vec![SPS, PPS, &[0x65, 10, 11, 12, 13][..]]);
+        assert_eq!(&idr_a[..3], &nals[2][..3]);
+        assert_eq!(annexb_nals(&units[1].data), vec![&[0x41, 9, 9][..]]);
+        assert_eq!(stats, DepackStats::default());
+    }
+
+    #[test]
+    fn a_lost_fragment_drops_its_unit_only() {
+        let packets = vec![
+            pkt(1, 100, true, &stap(&[SPS, PPS])),
+            pkt(2, 200, false, &[0x7c, 0x85, 10]),
+            // seq 3 lost
+            pkt(4, 200, true, &[0x7c, 0x45, 13]),
+            pkt(5, 300, true, &[0x41, 1]),
+        ];
+        let (units, stats) = run(&packets);
+        assert_eq!(units.len(), 2, "SPS unit and the P slice");
+        assert_eq!(stats.lost_packets, 1);
+        assert_eq!(stats.dropped_units, 1);
+    }
+
+    #[test]
+    fn nothing_before_the_first_sps_and_timestamp_change_ends_a_unit() {
+        let packets = vec![
+            pkt(1, 100, true, &[0x41, 1]),
+            pkt(2, 200, false, &stap(&[SPS, PPS])),
+            pkt(3, 200, false, &[0x65, 1]),
+            pkt(4, 300, false, &[0x41, 2]), // no marker on the previous unit
+            pkt(5, 300, true, &[0x41, 3]),
+        ];
+        let (units, _) = run(&packets);
+        assert_eq!(units.len(), 2);
+        assert_eq!(units[0].timestamp, 200);
+        assert_eq!(annexb_nals(&units[1].data).len(), 2);
+    }
+
+    #[test]
+    fn sequence_wraps_and_duplicates_are_ignored() {
+        let mut s = SeqTracker::default();
+        assert_eq!(s.next(1, 65534), Some(0));
+        assert_eq!(s.next(1, 65535), Some(0));
+        assert_eq!(s.next(1, 0), Some(0));
+        assert_eq!(s.next(1, 0), None);
+        assert_eq!(s.next(1, 3), Some(2));
+        assert_eq!(s.next(2, 100), Some(0), "a new source starts afresh");
+    }
+}
