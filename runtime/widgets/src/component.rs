@@ -3,6 +3,7 @@
 
 use mocu_jit::{self as jit, Evaluate, Slot};
 use mocu_language::program::{Component, Program};
+use mocu_language::types::TypeKind;
 use mocu_layout::lower::{LowerError, Lowerer, Scope, Source, value_ty};
 use mocu_value::Value;
 use std::collections::HashMap;
@@ -27,6 +28,10 @@ pub struct Compiled {
     pub slots: Vec<(String, jit::Ty)>,
     pub shapes: Vec<ShapeOut>,
     pub events: Vec<String>,
+    /// The data parameters (`value: number?`, `heading: number?`, `state: bool?`): optional
+    /// numbers and booleans with no default. A widget whose data parameters have not
+    /// changed for a while is stale.
+    pub data: Vec<String>,
 }
 
 /// Every component of a program, compiled together.
@@ -149,6 +154,22 @@ fn compile_component(c: &Component, index: usize) -> Result<(jit::Function, Comp
     let inputs = lw.slots.iter().map(|s| s.1).collect();
     Ok((
         jit::Function { inputs, outputs: outs },
-        Compiled { name: c.name.clone(), func: index, slots, shapes, events: c.events.clone() },
+        Compiled {
+            name: c.name.clone(),
+            func: index,
+            slots,
+            shapes,
+            events: c.events.clone(),
+            data: c
+                .params
+                .iter()
+                .filter(|p| {
+                    p.ty.absent
+                        && p.default.is_none()
+                        && matches!(p.ty.kind, TypeKind::Number { .. } | TypeKind::Bool)
+                })
+                .map(|p| p.name.clone())
+                .collect(),
+        },
     ))
 }

@@ -6,9 +6,14 @@
 //! Every widget also shows, drawn generically around its component:
 //! - control feedback (`feedback` property): pending (amber), accepted (green, briefly),
 //!   refused / failed / timed out (red, with the reason beneath, for a few seconds);
-//! - staleness: a widget whose `value` has not changed for `stale_after` is veiled and
-//!   tagged STALE (a single delayed call per widget re-checks; idle displays stay idle);
-//! - hover and press, for widgets with a `press` method (buttons).
+//! - staleness: a widget whose data parameters (its component's optional numbers and
+//!   booleans: `value`, `heading`, `pitch`, `state`…) have not changed for `stale_after` is
+//!   veiled and tagged STALE (a single delayed call per widget re-checks; idle displays stay
+//!   idle); absent data is the component's own "no data" look, not stale;
+//! - hover and press, for enabled widgets with a `press` method (buttons).
+//!
+//! Native widgets: `VehicleList` (every vehicle under `root.vehicles`, optionally of one
+//! `filter` type: name, type, link and fuel, live) and a `Video` placeholder.
 
 use crate::component::Library;
 use crate::draw::draw_shapes;
@@ -65,7 +70,20 @@ struct State {
     display_sub: Option<SubscriptionId>,
     windows: HashMap<Guid, SubscriptionId>,
     widgets: HashMap<Guid, WidgetState>,
+    /// Vehicle lists to repaint when a vehicle changes, and the watches that tell.
+    vehicle_lists: Vec<(Guid, Guid)>,
+    vehicles_watch: Option<mocu_dataserver::PathWatch>,
+    vehicle_subs: Vec<SubscriptionId>,
     closed: bool,
+}
+
+/// Room around a widget for its overlays (feedback outline, STALE tag, the reason beneath,
+/// labels a component draws under itself).
+const MARGIN: f32 = 16.0;
+const BELOW: f32 = 22.0;
+
+fn inflate(r: Rect) -> Rect {
+    Rect::new(r.x - MARGIN, r.y - MARGIN, r.w + 2.0 * MARGIN, r.h + 2.0 * MARGIN + BELOW)
 }
 
 struct WidgetState {
@@ -133,6 +151,8 @@ impl Drop for WidgetRenderer {
                 s
             }));
             v.extend(st.widgets.drain().map(|(_, w)| w.sub));
+            v.append(&mut st.vehicle_subs);
+            st.vehicles_watch = None;
             v
         };
         for s in subs {
@@ -230,21 +250,30 @@ impl Shared {
         let Some(name) = n.property_name() else { return };
         let now = Instant::now();
         let bounds = widget_bounds(&self.ds, w);
+        let data = self.is_data(w, name.as_str());
         let old = {
             let mut st = self.state.lock();
             let Some(ws) = st.widgets.get_mut(&w) else { return };
-            match name.as_str() {
-                "value" => ws.value_at = Some(now),
-                "feedback" => ws.feedback_at = Some(now),
-                _ => {}
+            if data {
+                ws.value_at = Some(now);
+            } else if name.as_str() == "feedback" {
+                ws.feedback_at = Some(now);
             }
             std::mem::replace(&mut ws.bounds, bounds)
         };
+        if name.as_str() == "component"
+            && self.ds.try_get(w, PropName::new("component")).as_ref().and_then(Value::as_str)
+                == Some("VehicleList")
+        {
+            self.watch_vehicles(window, w);
+        }
         // Repaint the old and the new place (a moved widget), with room for the overlays.
         self.damage(window, old);
         self.damage(window, bounds);
+        if data {
+            self.arm_stale_timer(w, self.config.stale_after);
+        }
         match name.as_str() {
-            "value" => self.arm_stale_timer(w, self.config.stale_after),
             "feedback" => {
                 let after = self.config.accepted_for.max(self.config.refused_for)
                     + Duration::from_millis(20);
@@ -291,13 +320,94 @@ impl Shared {
 
     fn damage(&self, window: Guid, r: Option<Rect>) {
         let _ = match r {
-            Some(r) => invalidate_rect(
-                &self.ds,
-                window,
-                Rect::new(r.x - 4.0, r.y - 4.0, r.w + 8.0, r.h + 26.0),
-            ),
+            Some(r) => invalidate_rect(&self.ds, window, inflate(r)),
             None => invalidate(&self.ds, window),
         };
+    }
+
+    /// Whether `prop` is one of the data parameters of widget `w`'s component.
+    fn is_data(&self, w: Guid, prop: &str) -> bool {
+        let comp = self.ds.try_get(w, PropName::new("component"));
+        let lib = self.lib.lock().clone();
+        match comp.as_ref().and_then(Value::as_str).and_then(|c| lib.components.get(c)) {
+            Some(c) => c.data.iter().any(|d| d == prop),
+            None => prop == "value",
+        }
+    }
+
+    fn data_props(&self, component: &str) -> Vec<String> {
+        match self.lib.lock().components.get(component) {
+            Some(c) => c.data.clone(),
+            None => Vec::new(),
+        }
+    }
+
+    /// Repaints vehicle list `w` whenever a vehicle appears, goes or changes.
+    fn watch_vehicles(self: &Arc<Self>, window: Guid, w: Guid) {
+        let start = {
+            let mut st = self.state.lock();
+            if st.vehicle_lists.iter().any(|(_, x)| *x == w) {
+                return;
+            }
+            st.vehicle_lists.push((window, w));
+            st.vehicles_watch.is_none()
+        };
+        if !start {
+            return;
+        }
+        let weak = Arc::downgrade(self);
+        let watch = self.ds.watch_object(Guid::ROOT, &["vehicles"], Some(&self.exec), move |e| {
+            let Some(sh) = weak.upgrade() else { return };
+            let old = std::mem::take(&mut sh.state.lock().vehicle_subs);
+            for s in old {
+                sh.ds.unsubscribe(s);
+            }
+            if e.kind != Kind::Deleted {
+                sh.follow_vehicles(e.object);
+            }
+            sh.repaint_vehicle_lists();
+        });
+        self.state.lock().vehicles_watch = watch.ok();
+    }
+
+    fn follow_vehicles(self: &Arc<Self>, folder: Guid) {
+        let weak = Arc::downgrade(self);
+        let sub = self.ds.subscribe_on(&self.exec, Topic::children(folder), move |n| {
+            let Some(sh) = weak.upgrade() else { return };
+            if let (Kind::New, Subject::Child { guid, .. }) = (n.kind, &n.subject) {
+                sh.follow_vehicle(*guid);
+            }
+            sh.repaint_vehicle_lists();
+        });
+        if let Ok(s) = sub {
+            self.state.lock().vehicle_subs.push(s);
+        }
+        for v in self.ds.children(folder).unwrap_or_default() {
+            self.follow_vehicle(v);
+        }
+    }
+
+    fn follow_vehicle(self: &Arc<Self>, v: Guid) {
+        let weak = Arc::downgrade(self);
+        let sub = self.ds.subscribe_on(&self.exec, Topic::properties(v), move |n| {
+            let Some(sh) = weak.upgrade() else { return };
+            if matches!(
+                n.property_name().as_ref().map(|p| p.as_str()),
+                Some("fuel" | "link" | "link_lost" | "stale" | "armed")
+            ) {
+                sh.repaint_vehicle_lists();
+            }
+        });
+        if let Ok(s) = sub {
+            self.state.lock().vehicle_subs.push(s);
+        }
+    }
+
+    fn repaint_vehicle_lists(&self) {
+        let lists = self.state.lock().vehicle_lists.clone();
+        for (window, w) in lists {
+            self.damage(window, widget_bounds(&self.ds, w));
+        }
     }
 
     /// Pointer input routed by the window manager: hover and press of widgets with a
@@ -372,7 +482,9 @@ impl Shared {
         ws.into_iter().rev().find(|w| {
             let has_press =
                 self.ds.methods(*w).is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "press"));
-            has_press && widget_bounds(&self.ds, *w).is_some_and(|b| b.contains(p))
+            has_press
+                && enabled(&self.ds, *w)
+                && widget_bounds(&self.ds, *w).is_some_and(|b| b.contains(p))
         })
     }
 
@@ -397,7 +509,7 @@ impl Shared {
                 _ => None,
             };
             if let Some(b) = bounds
-                && !Rect::new(b.x - 4.0, b.y - 4.0, b.w + 8.0, b.h + 26.0).intersects(&damage)
+                && !inflate(b).intersects(&damage)
             {
                 continue;
             }
@@ -410,9 +522,10 @@ impl Shared {
                 let outs = lib.evaluate(comp, &prop);
                 draw_shapes(c, &comp.shapes, &outs);
             } else {
-                draw_native(c, component, &props, bounds);
+                draw_native(c, &self.ds, component, &props, bounds);
             }
-            self.overlays(c, w, &props, bounds);
+            let data = self.data_props(component);
+            self.overlays(c, w, &props, &data, bounds);
             c.restore();
         }
     }
@@ -423,9 +536,12 @@ impl Shared {
         c: &mut dyn Canvas,
         w: Guid,
         props: &HashMap<String, Value>,
+        data: &[String],
         bounds: Option<Rect>,
     ) {
         let Some(b) = bounds else { return };
+        // Round widgets (dials, compasses, horizons) get round overlays.
+        let radius = if (b.w - b.h).abs() < 1.0 && b.w >= 48.0 { b.w / 2.0 } else { 4.0 };
         let r = Rect::new(-2.0, -2.0, b.w + 4.0, b.h + 4.0);
         let (hover, pressed, value_at, feedback_at) = {
             let st = self.state.lock();
@@ -447,15 +563,15 @@ impl Shared {
                 &Brush::Solid(Color::rgba(255, 255, 255, 28)),
             );
         }
-        if props.contains_key("value")
+        if data.iter().any(|d| props.contains_key(d))
             && value_at.is_some_and(|t| t.elapsed() >= self.config.stale_after)
         {
             c.fill_rounded_rect(
                 Rect::new(0.0, 0.0, b.w, b.h),
-                4.0,
-                &Brush::Solid(Color::rgba(11, 15, 20, 150)),
+                radius,
+                &Brush::Solid(Color::rgba(8, 10, 14, 165)),
             );
-            tag(c, "STALE", Point::new(b.w - 4.0, 4.0), Color::rgb(0xf5, 0x9e, 0x0b), Align::Right);
+            tag(c, "STALE", Point::new(b.w, -2.0), Color::rgb(0xf5, 0x9e, 0x0b), Align::Right);
         }
         let state = props.get("feedback").and_then(Value::as_str).unwrap_or("");
         let age = feedback_at.map_or(Duration::MAX, |t| t.elapsed());
@@ -476,10 +592,23 @@ impl Shared {
             if state == "pending" {
                 stroke = stroke.dash(&[5.0, 3.0], 0.0);
             }
-            c.stroke_path(&Path::rounded_rect(r, 5.0), &stroke, &Brush::Solid(col));
+            let rr = if radius > 4.0 { radius + 2.0 } else { 5.0 };
+            c.stroke_path(&Path::rounded_rect(r, rr), &stroke, &Brush::Solid(col));
             if show_reason {
                 let reason = props.get("feedback_reason").and_then(Value::as_str).unwrap_or(state);
-                let label = format!("{}: {reason}", state.replace('_', " ").to_uppercase());
+                let mut label = format!("{}: {reason}", state.replace('_', " ").to_uppercase());
+                // Cut to the room there is (the widget and its margins), with an ellipsis.
+                let room = b.w + MARGIN;
+                let width = |t: &str| mocu_display::measure_text(t, 11.0, false).width;
+                if width(&label) > room {
+                    let mut chars: Vec<char> = label.chars().collect();
+                    while chars.len() > 4
+                        && width(&format!("{}…", chars.iter().collect::<String>())) > room
+                    {
+                        chars.pop();
+                    }
+                    label = format!("{}…", chars.iter().collect::<String>().trim_end());
+                }
                 let style = TextStyle::new(11.0, col).baseline(Baseline::Top);
                 c.draw_text(&label, Point::new(0.0, b.h + 5.0), &style);
             }
@@ -488,7 +617,7 @@ impl Shared {
 }
 
 fn tag(c: &mut dyn Canvas, text: &str, at: Point, col: Color, align: Align) {
-    let style = TextStyle::new(10.0, col).align(align).baseline(Baseline::Top).bold();
+    let style = TextStyle::new(10.0, col).align(align).baseline(Baseline::Bottom).bold();
     c.draw_text(text, at, &style);
 }
 
@@ -501,26 +630,126 @@ fn widget_bounds(ds: &DataServer, w: Guid) -> Option<Rect> {
     Some(Rect::new(n("x")?, n("y")?, n("w")?, n("h")?))
 }
 
-/// Widgets drawn by Rust: a video placeholder (the video module claims video windows) and
-/// the vehicle list; unknown components draw a labelled frame, never nothing.
+/// Widgets drawn by Rust: the vehicle list, a video placeholder (the video module claims
+/// video windows); unknown components draw a labelled frame, never nothing.
 fn draw_native(
     c: &mut dyn Canvas,
+    ds: &DataServer,
     component: &str,
     props: &HashMap<String, Value>,
     bounds: Option<Rect>,
 ) {
     let b = bounds.unwrap_or(Rect::new(0.0, 0.0, 160.0, 40.0));
-    let panel = Color::rgba(0x14, 0x1c, 0x24, 0xe6);
-    let frame = Color::rgb(0x3a, 0x4a, 0x5a);
-    c.fill_rounded_rect(Rect::new(0.0, 0.0, b.w, b.h), 4.0, &Brush::Solid(panel));
-    c.stroke_rounded_rect(Rect::new(0.0, 0.0, b.w, b.h), 4.0, &Stroke::new(1.0), frame);
-    let dim = Color::rgb(0x8f, 0xa3, 0xb5);
+    c.fill_rounded_rect(Rect::new(0.0, 0.0, b.w, b.h), 4.0, &Brush::Solid(theme::PANEL));
+    c.stroke_rounded_rect(
+        Rect::new(0.5, 0.5, b.w - 1.0, b.h - 1.0),
+        4.0,
+        &Stroke::new(1.0),
+        theme::FRAME,
+    );
+    if component == "VehicleList" {
+        let filter = props.get("filter").and_then(Value::as_str).filter(|f| !f.is_empty());
+        vehicle_list(c, ds, filter, b);
+        return;
+    }
     let label = match component {
         "Video" => {
             format!("NO VIDEO  {}", props.get("source").map(|v| v.to_string()).unwrap_or_default())
         }
         other => other.to_string(),
     };
-    let style = TextStyle::new(12.0, dim).align(Align::Center).baseline(Baseline::Middle);
+    let style = TextStyle::new(12.0, theme::DIM).align(Align::Center).baseline(Baseline::Middle);
     c.draw_text(&label, Point::new(b.w / 2.0, b.h / 2.0), &style);
+}
+
+/// The stdlib theme's colours, for what Rust draws (stdlib/theme.mocu).
+mod theme {
+    use mocu_display::Color;
+    pub const PANEL: Color = Color::rgba(0x10, 0x18, 0x20, 0xe0);
+    pub const TRACK: Color = Color::rgb(0x26, 0x32, 0x3e);
+    pub const FRAME: Color = Color::rgb(0x3a, 0x4a, 0x5a);
+    pub const TEXT: Color = Color::rgb(0xe8, 0xf0, 0xf8);
+    pub const DIM: Color = Color::rgb(0x8f, 0xa3, 0xb5);
+    pub const GOOD: Color = Color::rgb(0x22, 0xc5, 0x5e);
+    pub const CAUTION: Color = Color::rgb(0xf5, 0x9e, 0x0b);
+    pub const ALARM: Color = Color::rgb(0xef, 0x44, 0x44);
+    pub const NODATA: Color = Color::rgb(0x5b, 0x64, 0x70);
+}
+
+/// One row per vehicle: a link-state dot, the name, its type, link and fuel as small bars.
+fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Rect) {
+    let head = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle).bold();
+    c.draw_text("VEHICLES", Point::new(10.0, 13.0), &head);
+    c.line(Point::new(6.0, 25.0), Point::new(b.w - 6.0, 25.0), 1.0, theme::FRAME);
+    let vehicles = ds
+        .resolve(&["vehicles"])
+        .and_then(|f| ds.children(f).ok())
+        .unwrap_or_default()
+        .into_iter()
+        .filter_map(|v| ds.info(v).ok().map(|i| (v, i)))
+        .filter(|(_, i)| filter.is_none_or(|f| &*i.kind == f))
+        .collect::<Vec<_>>();
+    if vehicles.is_empty() {
+        let st = TextStyle::new(12.0, theme::NODATA).baseline(Baseline::Middle);
+        c.draw_text("— no vehicles —", Point::new(10.0, 40.0), &st);
+        return;
+    }
+    let row_h = 26.0;
+    let bar_w = ((b.w - 150.0) / 2.0 - 8.0).clamp(24.0, 90.0);
+    for (i, (v, info)) in vehicles.iter().enumerate() {
+        let y = 28.0 + i as f32 * row_h + row_h / 2.0;
+        if y + row_h / 2.0 > b.h {
+            break;
+        }
+        let num = |k: &str| ds.try_get(*v, PropName::new(k)).and_then(|x| x.as_f64());
+        let flag = |k: &str| ds.try_get(*v, PropName::new(k)) == Some(Value::Bool(true));
+        let lost = flag("link_lost") || flag("stale");
+        let link = num("link");
+        let fuel = num("fuel");
+        let dot = if lost {
+            theme::ALARM
+        } else if link.is_some_and(|l| l < 0.3) {
+            theme::CAUTION
+        } else if link.is_some() {
+            theme::GOOD
+        } else {
+            theme::NODATA
+        };
+        c.fill_circle(Point::new(14.0, y), 4.5, dot);
+        let name = TextStyle::new(13.0, if lost { theme::DIM } else { theme::TEXT })
+            .baseline(Baseline::Middle)
+            .bold();
+        c.draw_text(&info.name, Point::new(26.0, y), &name);
+        let kind = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle);
+        c.draw_text(&info.kind.to_uppercase(), Point::new(86.0, y), &kind);
+        let mut x = 130.0;
+        for (label, value, warn, alarm) in [("LNK", link, 0.3, 0.1), ("FUEL", fuel, 0.2, 0.1)] {
+            let small = TextStyle::new(9.0, theme::DIM).baseline(Baseline::Middle);
+            c.draw_text(label, Point::new(x, y), &small);
+            let bx = x + 26.0;
+            let track = Rect::new(bx, y - 4.0, bar_w, 8.0);
+            c.fill_rounded_rect(track, 2.0, &Brush::Solid(theme::TRACK));
+            match value {
+                Some(f) => {
+                    let col = if f < alarm {
+                        theme::ALARM
+                    } else if f < warn {
+                        theme::CAUTION
+                    } else {
+                        theme::GOOD
+                    };
+                    let fw = (bar_w * f.clamp(0.0, 1.0) as f32).max(0.0);
+                    if fw > 0.5 {
+                        c.fill_rounded_rect(
+                            Rect::new(bx, y - 4.0, fw, 8.0),
+                            2.0,
+                            &Brush::Solid(col),
+                        );
+                    }
+                }
+                None => c.stroke_rounded_rect(track, 2.0, &Stroke::new(1.0), theme::NODATA),
+            }
+            x = bx + bar_w + 10.0;
+        }
+    }
 }

@@ -1,0 +1,173 @@
+//! Golden images of the widgets and of the paper's displays, drawn by the CPU path
+//! (tiny-skia) of a headless `Display` with the widget renderer, the map and a loaded
+//! layout; the simulator is stepped explicitly under a fixed seed (no wall clock).
+//!
+//! `UPDATE_GOLDEN=1 cargo test -p mocu-widgets --test golden` rewrites tests/golden/*.png.
+//! Tolerance: every channel of every pixel within `CHANNEL_TOL` (3) of the reference,
+//! except at most `OUTLIER_FRACTION` (0.1%) of the pixels — anti-aliased edges whose
+//! coverage may step differently on CPUs with other SIMD paths. A mismatching frame is
+//! written to `target/tmp/golden-actual/` for inspection.
+
+use mocu_dataserver::{Config, DataServer, Guid, Value};
+use mocu_display::{Clock, Display, DisplayOptions, PointerEvent};
+use mocu_host::ModuleContext;
+use mocu_layout::{Layout, LayoutConfig, NullSink};
+use mocu_sim::{Sim, SimConfig};
+use mocu_widgets::{Library, MapModule, RendererConfig, WidgetRenderer};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+const CHANNEL_TOL: u8 = 3;
+const OUTLIER_FRACTION: f64 = 0.001;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A display running one layout: the display, the widget renderer, the map and the layout.
+struct Rig {
+    ds: DataServer,
+    display: Display,
+    layout: Layout,
+    _renderer: WidgetRenderer,
+    _map: MapModule,
+}
+
+impl Rig {
+    fn new(file: &Path, size: (u32, u32), config: RendererConfig) -> Rig {
+        let (bundle, _) = mocu_language::load_target(file)
+            .unwrap_or_else(|e| panic!("{}: {e:?}", file.display()));
+        let program = &bundle.layouts[0].program;
+        let ds = DataServer::new(Config { workers: 2 });
+        let display =
+            Display::new(&ds, DisplayOptions::new(size.0, size.1).clock(Clock::manual())).unwrap();
+        let lib = Library::compile(program, true).unwrap();
+        let renderer = WidgetRenderer::start(&ds, lib, config).unwrap();
+        let map = MapModule::start(&ds).unwrap();
+        let lc = LayoutConfig { screen: (size.0 as f64, size.1 as f64), ..LayoutConfig::default() };
+        let layout = Layout::load(&ds, program, lc, Arc::new(NullSink)).unwrap();
+        Rig { ds, display, layout, _renderer: renderer, _map: map }
+    }
+
+    /// Lets every notification settle, then draws.
+    fn frame(&mut self) -> tiny_skia::Pixmap {
+        for _ in 0..3 {
+            self.layout.settle();
+            self.ds.quiesce();
+            self.display.frame();
+        }
+        self.display.read_frame()
+    }
+
+    fn widget(&self, window: &str, name: &str) -> Guid {
+        self.ds.resolve(&["display", window, name]).unwrap_or_else(|| panic!("no widget {name}"))
+    }
+}
+
+fn sheet(config: RendererConfig) -> Rig {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/sheet.mocu");
+    Rig::new(&file, (960, 950), config)
+}
+
+/// Feedback outlines shown long enough that a slow test machine still sees them.
+fn steady() -> RendererConfig {
+    RendererConfig {
+        stale_after: Duration::from_secs(3600),
+        accepted_for: Duration::from_secs(3600),
+        refused_for: Duration::from_secs(3600),
+    }
+}
+
+fn check_golden(name: &str, frame: &tiny_skia::Pixmap) {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("tests/golden/{name}.png"));
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        frame.save_png(&path).unwrap();
+        eprintln!("golden: wrote {}", path.display());
+        return;
+    }
+    let want = tiny_skia::Pixmap::load_png(&path).unwrap_or_else(|e| {
+        panic!("golden {} missing ({e}); run with UPDATE_GOLDEN=1 to create it", path.display())
+    });
+    assert_eq!((want.width(), want.height()), (frame.width(), frame.height()), "size of {name}");
+    let (mut outliers, mut worst) = (0usize, 0u8);
+    for (a, b) in frame.data().chunks_exact(4).zip(want.data().chunks_exact(4)) {
+        let d = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+        worst = worst.max(d);
+        if d > CHANNEL_TOL {
+            outliers += 1;
+        }
+    }
+    let px = (frame.width() * frame.height()) as f64;
+    if outliers as f64 > px * OUTLIER_FRACTION {
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("golden-actual");
+        std::fs::create_dir_all(&dir).unwrap();
+        let actual = dir.join(format!("{name}.png"));
+        frame.save_png(&actual).unwrap();
+        panic!(
+            "{name}: {outliers} pixels differ by more than {CHANNEL_TOL} (worst {worst}); actual image in {}",
+            actual.display()
+        );
+    }
+}
+
+#[test]
+fn every_widget_nominal_caution_warning_and_no_data() {
+    let mut rig = sheet(steady());
+    let f = rig.frame();
+    check_golden("widgets", &f);
+}
+
+#[test]
+fn every_widget_stale() {
+    let mut rig = sheet(RendererConfig { stale_after: Duration::ZERO, ..steady() });
+    let f = rig.frame();
+    check_golden("widgets_stale", &f);
+}
+
+/// A part of a frame.
+fn crop(f: &tiny_skia::Pixmap, x: u32, y: u32, w: u32, h: u32) -> tiny_skia::Pixmap {
+    let mut out = tiny_skia::Pixmap::new(w, h).unwrap();
+    for row in 0..h {
+        let src = (((y + row) * f.width() + x) * 4) as usize;
+        let dst = (row * w * 4) as usize;
+        out.data_mut()[dst..dst + (w * 4) as usize]
+            .copy_from_slice(&f.data()[src..src + (w * 4) as usize]);
+    }
+    out
+}
+
+/// Control feedback on gauges and controls (pending, accepted, refused with its reason cut
+/// to fit), a hovered button, a pressed one; a disabled button ignores the pointer.
+#[test]
+fn feedback_hover_press_and_disabled() {
+    let mut rig = sheet(steady());
+    rig.frame();
+    let set = |rig: &Rig, w: &str, state: &str, reason: Option<&str>| {
+        let g = rig.widget("sheet", w);
+        rig.ds.set(g, "feedback", Value::str(state)).unwrap();
+        if let Some(r) = reason {
+            rig.ds.set(g, "feedback_reason", Value::str(r)).unwrap();
+        }
+    };
+    set(&rig, "dial_nominal", "pending", None);
+    set(&rig, "bar_nominal", "accepted", None);
+    set(&rig, "text_nominal", "refused", Some("not armed"));
+    set(&rig, "toggle_on", "pending", None);
+    set(&rig, "horizon_level", "failed", Some("no attitude source on this vehicle"));
+    set(&rig, "button", "accepted", None);
+    set(&rig, "button_disabled", "refused", Some("engine off"));
+    // The disabled button: pointing at it changes nothing.
+    let arm = |f: &tiny_skia::Pixmap| crop(f, 296, 700, 128, 48);
+    let before = arm(&rig.frame());
+    rig.display.pointer(360.0, 727.0, PointerEvent::Move);
+    assert!(before.data() == arm(&rig.frame()).data(), "no hover on a disabled button");
+    rig.display.pointer(80.0, 727.0, PointerEvent::Move);
+    let f = rig.frame();
+    check_golden("button_hover", &crop(&f, 0, 690, 440, 80));
+    rig.display.pointer(220.0, 727.0, PointerEvent::Move);
+    rig.display.pointer(220.0, 727.0, PointerEvent::Down(0));
+    let f = rig.frame();
+    check_golden("button_pressed", &crop(&f, 0, 690, 440, 80));
+    check_golden("widgets_feedback", &f);
+}
