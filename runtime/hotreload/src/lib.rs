@@ -1,0 +1,22 @@
+//! Hot reload during trials: a human-factors engineer saves a layout and the display changes
+//! in front of the operator, with nothing lost.
+//!
+//! - [`Reloader`] owns the running layout. `reload_now` re-checks the target and swaps the
+//!   program in incrementally (`mocu_layout::Layout::reload`): unchanged windows, widgets and
+//!   watches keep their objects, subscriptions and state. A target with errors never replaces
+//!   the running layout: its diagnostics go to the terminal, the event log, and a banner on
+//!   the operator's display (`root.operator.diagnostics`), which goes when the file is fixed.
+//! - [`watch`](Reloader::watch) follows every file the target depends on with `notify`,
+//!   watching their folders so editors that save by rename (vim, VS Code) or delete and
+//!   recreate are seen, and coalesces an editor's burst of events into one reload. Checking
+//!   and compiling run on the watcher's thread, never the frame thread.
+//! - `root.operator.reload()` asks for a reload through the DataServer (a remote tool).
+//!
+//! Architecture invariant: the world model's vehicles, goals and routes are never touched
+//! by a reload; only objects the layout published under `root.display` and `root.operator`.
+
+mod banner;
+mod reloader;
+mod watcher;
+
+pub use reloader::{Outcome, Reloader, ReloaderOptions};

@@ -1,0 +1,307 @@
+use crate::banner;
+use mocu_dataserver::{CallOutcome, DataServer, MethodSpec, ObjectInfo};
+use mocu_language::{Diagnostics, FsLoader, Severity, SourceMap};
+use mocu_layout::{EventSink, Layout, LayoutConfig, ReloadStats};
+use mocu_value::{Guid, Value};
+use parking_lot::Mutex;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// What a reload did.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// The new program runs.
+    Reloaded(ReloadStats),
+    /// The target has errors (rendered, human form); the last good layout stays.
+    Refused { errors: usize, rendered: String },
+    /// The target could not be read or run at all; the last good layout stays.
+    Failed(String),
+}
+
+#[derive(Clone)]
+pub struct ReloaderOptions {
+    pub config: LayoutConfig,
+    /// Which of a profile's layouts runs (file name or stem); the first when `None`.
+    pub layout: Option<String>,
+    /// Called with the components of each newly loaded program (the widget renderer's
+    /// library is rebuilt from them).
+    pub on_components: Option<Arc<dyn Fn(&mocu_language::Program) + Send + Sync>>,
+}
+
+/// The running layout of a target, and the means to reload it.
+pub struct Reloader {
+    pub(crate) inner: Arc<Inner>,
+}
+
+pub(crate) struct Inner {
+    pub(crate) ds: DataServer,
+    pub(crate) target: PathBuf,
+    pub(crate) options: ReloaderOptions,
+    pub(crate) sink: Arc<dyn EventSink>,
+    pub(crate) state: Mutex<State>,
+}
+
+pub(crate) struct State {
+    layout: Option<Layout>,
+    /// Every file the running target depends on.
+    pub(crate) files: Vec<PathBuf>,
+    pub(crate) watcher: Option<crate::watcher::Watcher>,
+    reloads: u64,
+}
+
+/// The layout to run from a bundle: by name, else the first.
+pub fn choose(bundle: &mocu_language::Bundle, name: Option<&str>) -> Option<usize> {
+    let layouts = &bundle.layouts;
+    match name {
+        None => (!layouts.is_empty()).then_some(0),
+        Some(n) => layouts.iter().position(|l| {
+            let p = Path::new(&l.path);
+            l.path == n
+                || p.file_name().is_some_and(|f| f == n)
+                || p.file_stem().is_some_and(|f| f == n)
+        }),
+    }
+}
+
+impl Reloader {
+    /// Runs `bundle` (already checked from `target`) and keeps `target` to reload from.
+    pub fn start(
+        ds: &DataServer,
+        target: &Path,
+        bundle: &mocu_language::Bundle,
+        options: ReloaderOptions,
+        sink: Arc<dyn EventSink>,
+    ) -> Result<Reloader, String> {
+        let index = choose(bundle, options.layout.as_deref()).ok_or_else(|| {
+            format!(
+                "no layout `{}` in {}",
+                options.layout.as_deref().unwrap_or(""),
+                target.display()
+            )
+        })?;
+        let chosen = &bundle.layouts[index];
+        let layout = Layout::load(ds, &chosen.program, options.config.clone(), sink.clone())
+            .map_err(|e| e.to_string())?;
+        if let Some(f) = &options.on_components {
+            f(&chosen.program);
+        }
+        let files = dependencies(target, bundle, index);
+        let inner = Arc::new(Inner {
+            ds: ds.clone(),
+            target: target.to_path_buf(),
+            options,
+            sink,
+            state: Mutex::new(State { layout: Some(layout), files, watcher: None, reloads: 0 }),
+        });
+        banner::start(ds, inner.options.config.screen);
+        publish_reload_method(&inner);
+        Ok(Reloader { inner })
+    }
+
+    /// Re-checks the target now and swaps the new program in, or keeps the running one and
+    /// shows why.
+    pub fn reload_now(&self) -> Outcome {
+        self.inner.reload()
+    }
+
+    /// The files the running target depends on.
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.inner.state.lock().files.clone()
+    }
+
+    /// Runs `f` with the running layout.
+    pub fn with_layout<R>(&self, f: impl FnOnce(&Layout) -> R) -> Option<R> {
+        self.inner.state.lock().layout.as_ref().map(f)
+    }
+
+    /// Starts following the target's files; each change (an editor's burst of events
+    /// coalesced) reloads on the watcher's thread.
+    pub fn watch(&self) -> Result<(), String> {
+        crate::watcher::start(&self.inner)
+    }
+
+    /// Reloads done so far (successful or not).
+    pub fn reloads(&self) -> u64 {
+        self.inner.state.lock().reloads
+    }
+}
+
+impl Drop for Reloader {
+    fn drop(&mut self) {
+        let (layout, watcher) = {
+            let mut st = self.inner.state.lock();
+            (st.layout.take(), st.watcher.take())
+        };
+        drop(watcher);
+        drop(layout);
+        let _ = self.inner.ds.unpublish_method(Guid::ROOT, "reload");
+        if let Some(op) = self.inner.ds.resolve(&["operator"]) {
+            let _ = self.inner.ds.unpublish_method(op, "reload");
+        }
+    }
+}
+
+/// The layout file, everything it uses, and for a profile the profile and its schemas.
+fn dependencies(target: &Path, bundle: &mocu_language::Bundle, index: usize) -> Vec<PathBuf> {
+    let mut files = vec![target.to_path_buf()];
+    for f in &bundle.layouts[index].program.files {
+        files.push(PathBuf::from(f));
+    }
+    if bundle.profile.is_some()
+        && let Some(dir) = target.parent()
+        && let Ok(text) = std::fs::read_to_string(target)
+        && let Ok(t) = text.parse::<toml_like::Table>()
+    {
+        for s in t.schemas {
+            files.push(dir.join(s));
+        }
+    }
+    files.sort();
+    files.dedup();
+    files
+}
+
+/// The few profile keys dependency tracking needs, read without a TOML dependency.
+mod toml_like {
+    pub struct Table {
+        pub schemas: Vec<String>,
+    }
+
+    impl std::str::FromStr for Table {
+        type Err = ();
+        fn from_str(s: &str) -> Result<Table, ()> {
+            let mut schemas = Vec::new();
+            for line in s.lines() {
+                let l = line.trim();
+                if let Some(rest) = l.strip_prefix("schemas") {
+                    for part in rest.split('"').skip(1).step_by(2) {
+                        schemas.push(part.to_string());
+                    }
+                }
+            }
+            Ok(Table { schemas })
+        }
+    }
+}
+
+fn publish_reload_method(inner: &Arc<Inner>) {
+    let ds = &inner.ds;
+    let Some(op) = ds
+        .resolve(&["operator"])
+        .or_else(|| ds.create_object(Guid::ROOT, ObjectInfo::new("operator", "operator")).ok())
+    else {
+        return;
+    };
+    let weak = Arc::downgrade(inner);
+    let _ = ds.publish_method_fn(
+        op,
+        MethodSpec::new("reload").describe("Re-check and reload the running layout"),
+        move |_| {
+            let Some(inner) = weak.upgrade() else {
+                return CallOutcome::Failed("no layout".into());
+            };
+            // Checking and compiling take a while: off the caller's thread.
+            std::thread::spawn(move || {
+                inner.reload();
+            });
+            CallOutcome::Accepted(vec![])
+        },
+    );
+}
+
+impl Inner {
+    pub(crate) fn reload(self: &Arc<Self>) -> Outcome {
+        let t0 = std::time::Instant::now();
+        let outcome = self.check_and_swap();
+        let ms = t0.elapsed().as_secs_f64() * 1000.0;
+        let mut st = self.state.lock();
+        st.reloads += 1;
+        drop(st);
+        match &outcome {
+            Outcome::Reloaded(stats) => {
+                banner::clear(&self.ds);
+                eprintln!(
+                    "mocu: reloaded {} in {ms:.1} ms ({} kept, {} changed, {} added, {} removed)",
+                    self.target.display(),
+                    stats.kept,
+                    stats.changed,
+                    stats.added,
+                    stats.removed
+                );
+            }
+            Outcome::Refused { rendered, errors } => {
+                eprint!("{rendered}");
+                eprintln!(
+                    "mocu: {} has {errors} error(s); the last good layout stays on screen",
+                    self.target.display()
+                );
+            }
+            Outcome::Failed(why) => {
+                eprintln!(
+                    "mocu: reload of {} failed: {why}; the last good layout stays on screen",
+                    self.target.display()
+                );
+                banner::show(&self.ds, &[why.clone()]);
+                self.sink.record("diagnostic", &[("message", Value::str(why))]);
+            }
+        }
+        outcome
+    }
+
+    fn check_and_swap(self: &Arc<Self>) -> Outcome {
+        let text = match std::fs::read_to_string(&self.target) {
+            Ok(t) => t,
+            Err(e) => {
+                return Outcome::Failed(format!("cannot read {}: {e}", self.target.display()));
+            }
+        };
+        let path = self.target.to_string_lossy().replace('\\', "/");
+        let mut sources = SourceMap::new();
+        let mut diags = Diagnostics::new();
+        let bundle = mocu_language::check_path(&path, text, &FsLoader, &mut sources, &mut diags);
+        diags.sort();
+        let errors = diags.count(Severity::Error);
+        let list = diags.into_vec();
+        if errors > 0 {
+            let rendered = mocu_language::render::human(&sources, &list);
+            let mut lines = Vec::new();
+            for d in list.iter().filter(|d| d.severity == Severity::Error) {
+                let l = d.locate(&sources);
+                lines.push(format!("{}:{}:{}: {}", l.file, l.line, l.column, l.message));
+                self.sink.record(
+                    "diagnostic",
+                    &[
+                        ("file", Value::str(&l.file)),
+                        ("line", Value::Int(l.line as i64)),
+                        ("column", Value::Int(l.column as i64)),
+                        ("severity", Value::str("error")),
+                        ("code", Value::str(&l.code)),
+                        ("message", Value::str(&l.message)),
+                    ],
+                );
+            }
+            banner::show(&self.ds, &lines);
+            return Outcome::Refused { errors, rendered };
+        }
+        let Some(bundle) = bundle else {
+            return Outcome::Failed("the target is not a layout or a profile".into());
+        };
+        let Some(index) = choose(&bundle, self.options.layout.as_deref()) else {
+            return Outcome::Failed("the chosen layout is no longer in the profile".into());
+        };
+        let program = &bundle.layouts[index].program;
+        let mut st = self.state.lock();
+        let Some(layout) = st.layout.as_ref() else { return Outcome::Failed("stopped".into()) };
+        match layout.reload(program) {
+            Ok(stats) => {
+                st.files = dependencies(&self.target, &bundle, index);
+                drop(st);
+                if let Some(f) = &self.options.on_components {
+                    f(program);
+                }
+                Outcome::Reloaded(stats)
+            }
+            Err(e) => Outcome::Failed(e.to_string()),
+        }
+    }
+}

@@ -1,0 +1,268 @@
+//! Hot reload, end to end: a test edits the layout file the way editors do and sees the
+//! change in `root.display` and in the rendered frame; broken edits keep the old display
+//! and raise the banner; a storm of random edits leaves exactly what a fresh load gives.
+use mocu_dataserver::*;
+use mocu_display::{BackendChoice, Display, DisplayOptions};
+use mocu_hotreload::*;
+use mocu_layout::{LayoutConfig, MemorySink};
+use mocu_widgets::{Library, RendererConfig, WidgetRenderer};
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+fn layout_text(colour: &str, width: u32, extra: &str) -> String {
+    format!(
+        r#"
+component Box(c: colour) {{ rect 0 0 w h  fill c }}
+window hud {{ layer 10 rect 0 0 100% 100% }}
+in hud {{
+  a: Box {{ at 10 60 {width} 40  c {colour} }}
+  b: Box {{ at 10 110 100 40  c #0000ff }}
+{extra}}}
+"#
+    )
+}
+
+struct Rig {
+    ds: DataServer,
+    reloader: Reloader,
+    display: Display,
+    _renderer: Arc<WidgetRenderer>,
+    _dir: tempfile::TempDir,
+    path: std::path::PathBuf,
+    sink: Arc<MemorySink>,
+}
+
+fn rig(text: &str) -> Rig {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("hud.mocu");
+    std::fs::write(&path, text).unwrap();
+    let ds = DataServer::default();
+    let display =
+        Display::new(&ds, DisplayOptions::new(320, 200).backend(BackendChoice::Cpu)).unwrap();
+    let (bundle, _) = mocu_language::load_target(&path).unwrap_or_else(|e| panic!("{e}"));
+    let renderer = Arc::new(
+        WidgetRenderer::start(
+            &ds,
+            Library::compile(&bundle.layouts[0].program, true).unwrap(),
+            RendererConfig::default(),
+        )
+        .unwrap(),
+    );
+    let r2 = renderer.clone();
+    let options = ReloaderOptions {
+        config: LayoutConfig {
+            screen: (320.0, 200.0),
+            tick: Duration::from_millis(1),
+            ..LayoutConfig::default()
+        },
+        layout: None,
+        on_components: Some(Arc::new(move |p| {
+            if let Ok(lib) = Library::compile(p, true) {
+                r2.replace_library(lib);
+            }
+        })),
+    };
+    let sink = Arc::new(MemorySink::default());
+    let reloader = Reloader::start(&ds, &path, &bundle, options, sink.clone()).unwrap();
+    Rig { ds, reloader, display, _renderer: renderer, _dir: dir, path, sink }
+}
+
+impl Rig {
+    fn frame(&mut self) -> (u8, u8, u8) {
+        self.reloader.with_layout(|l| l.settle());
+        self.ds.quiesce();
+        self.display.frame();
+        let f = self.display.read_frame();
+        let p = f.pixel(20, 70).unwrap();
+        (p.red(), p.green(), p.blue())
+    }
+
+    fn width_of_a(&self) -> Option<Value> {
+        let a = self.ds.resolve(&["display", "hud", "a"])?;
+        self.ds.try_get(a, PropName::new("w"))
+    }
+
+    fn wait(&mut self, what: &str, mut f: impl FnMut(&mut Rig) -> bool) {
+        let t0 = Instant::now();
+        while !f(self) {
+            assert!(t0.elapsed() < Duration::from_secs(10), "timed out waiting for {what}");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+/// Saves like vim or VS Code: write a new file, then rename it over the old one.
+fn save_by_rename(path: &Path, text: &str) {
+    let tmp = path.with_extension("mocu.swp");
+    std::fs::write(&tmp, text).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+#[test]
+fn saving_a_layout_changes_the_display_and_the_frame_at_once() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    assert_eq!(r.frame(), (255, 0, 0));
+    r.reloader.watch().unwrap();
+    let b = r.ds.resolve(&["display", "hud", "b"]).unwrap();
+    std::fs::write(&r.path, layout_text("#00ff00", 100, "")).unwrap();
+    r.wait("the new colour on screen", |r| r.frame() == (0, 255, 0));
+    assert_eq!(
+        r.ds.resolve(&["display", "hud", "b"]).unwrap(),
+        b,
+        "only `a` changed: `b` keeps its object"
+    );
+    // An editor that replaces the file by rename.
+    save_by_rename(&r.path, &layout_text("#00ff00", 150, ""));
+    r.wait("the new width", |r| r.width_of_a() == Some(Value::Float(150.0)));
+    // Deleted and created again.
+    std::fs::remove_file(&r.path).unwrap();
+    std::thread::sleep(Duration::from_millis(60));
+    std::fs::write(&r.path, layout_text("#ffff00", 150, "")).unwrap();
+    r.wait("yellow", |r| r.frame() == (255, 255, 0));
+    assert!(!r.sink.of("reload").is_empty());
+}
+
+#[test]
+fn a_broken_save_keeps_the_last_good_layout_and_raises_the_banner_until_fixed() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    r.reloader.watch().unwrap();
+    let before = r.ds.snapshot(r.ds.resolve(&["display", "hud"]).unwrap()).unwrap();
+    // A partial write: the file is cut in the middle of a widget.
+    let text = layout_text("#00ff00", 100, "");
+    let cut = text.find("c #00ff00").unwrap();
+    std::fs::write(&r.path, &text[..cut]).unwrap();
+    r.wait("the banner", |r| {
+        r.ds.resolve(&["operator", "diagnostics"])
+            .and_then(|d| r.ds.try_get(d, PropName::new("active")))
+            == Some(Value::Bool(true))
+    });
+    assert_eq!(r.frame(), (255, 0, 0), "the old frame stays");
+    assert_eq!(r.ds.snapshot(r.ds.resolve(&["display", "hud"]).unwrap()).unwrap(), before);
+    let d = r.ds.resolve(&["operator", "diagnostics"]).unwrap();
+    let text_shown = r.ds.get(d, "text").unwrap().to_string();
+    assert!(text_shown.contains("hud.mocu:"), "file:line:col in the banner: {text_shown}");
+    let banner = r.ds.resolve(&["display", "diagnostics"]).unwrap();
+    assert_eq!(r.ds.get(banner, "visible").unwrap(), Value::Bool(true));
+    let logged = r.sink.of("diagnostic");
+    assert!(
+        logged.iter().any(|f| f.iter().any(|(k, v)| k == "line" && v.as_i64().is_some())),
+        "{logged:?}"
+    );
+    // The fix, a moment later.
+    std::fs::write(&r.path, &text).unwrap();
+    r.wait("the fix on screen", |r| r.frame() == (0, 255, 0));
+    assert_eq!(r.ds.get(banner, "visible").unwrap(), Value::Bool(false));
+}
+
+#[test]
+fn a_remote_tool_can_ask_for_a_reload_through_the_dataserver() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    std::fs::write(&r.path, layout_text("#0000ff", 100, "")).unwrap();
+    let op = r.ds.resolve(&["operator"]).unwrap();
+    assert!(r.ds.call_wait(op, "reload", vec![], None).is_accepted());
+    r.wait("blue", |r| r.frame() == (0, 0, 255));
+}
+
+/// The display subtree without GUIDs (they differ between two worlds).
+fn shape(s: &Snapshot) -> String {
+    let mut out = format!("{}:{}:{}[", s.name, s.kind, s.subtype);
+    for (n, v) in &s.properties {
+        if n != "revision" {
+            out.push_str(&format!("{n}={v:?};"));
+        }
+    }
+    let mut kids: Vec<String> = s.children.iter().map(shape).collect();
+    kids.sort();
+    out.push_str(&kids.join(","));
+    out.push(']');
+    out
+}
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n
+    }
+}
+
+fn random_layout(rng: &mut Rng) -> String {
+    let colours = ["#ff0000", "#00ff00", "#123456", "#abcdef"];
+    let mut extra = String::new();
+    for i in 0..rng.below(4) {
+        extra.push_str(&format!(
+            "  x{i}: Box {{ at {} 160 20 20  c {} }}\n",
+            10 + 30 * i,
+            colours[rng.below(4) as usize]
+        ));
+    }
+    let mut text = layout_text(colours[rng.below(4) as usize], 50 + rng.below(100) as u32, &extra);
+    if rng.below(3) == 0 {
+        // Break it: cut it, or drop a character.
+        let at = rng.below(text.len() as u64) as usize;
+        let at = (0..=at).rev().find(|i| text.is_char_boundary(*i)).unwrap_or(0);
+        if rng.below(2) == 0 {
+            text.truncate(at);
+        } else {
+            text.remove(at);
+        }
+    }
+    text
+}
+
+#[test]
+fn a_thousand_random_edits_leave_what_a_fresh_load_of_the_last_file_gives() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    let mut rng = Rng(0x9e3779b97f4a7c15);
+    let mut last = String::new();
+    for i in 0..1000 {
+        last = random_layout(&mut rng);
+        std::fs::write(&r.path, &last).unwrap();
+        let _ = r.reloader.reload_now();
+        if i % 97 == 0 {
+            r.frame();
+        }
+    }
+    // Make sure the last file is a good one, then compare with a fresh world.
+    if mocu_language::load_target(&r.path).is_err() {
+        last = layout_text("#abcdef", 77, "  x0: Box { at 10 160 20 20  c #123456 }\n");
+        std::fs::write(&r.path, &last).unwrap();
+    }
+    assert!(matches!(r.reloader.reload_now(), Outcome::Reloaded(_)));
+    r.frame();
+    let fresh = rig(&last);
+    fresh.reloader.with_layout(|l| l.settle());
+    let shape_of =
+        |ds: &DataServer| shape(&ds.snapshot(ds.resolve(&["display", "hud"]).unwrap()).unwrap());
+    assert_eq!(shape_of(&r.ds), shape_of(&fresh.ds));
+    r.ds.quiesce();
+    fresh.ds.quiesce();
+    assert_eq!(
+        r.ds.subscription_count(),
+        fresh.ds.subscription_count(),
+        "no subscription left behind"
+    );
+    assert_eq!(r.reloader.reloads(), 1001);
+}
+
+#[test]
+fn a_burst_of_saves_through_the_watcher_settles_on_the_last_one() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    r.reloader.watch().unwrap();
+    let mut rng = Rng(7);
+    for _ in 0..50 {
+        std::fs::write(&r.path, random_layout(&mut rng)).unwrap();
+    }
+    let last = layout_text("#00ff00", 120, "  x0: Box { at 10 160 20 20  c #abcdef }\n");
+    std::fs::write(&r.path, &last).unwrap();
+    r.wait("the last save on screen", |r| {
+        r.frame() == (0, 255, 0) && r.width_of_a() == Some(Value::Float(120.0))
+    });
+    assert!(r.reloader.reloads() < 51, "bursts are coalesced: {} reloads", r.reloader.reloads());
+}
