@@ -171,3 +171,55 @@ fn feedback_hover_press_and_disabled() {
     check_golden("button_pressed", &crop(&f, 0, 690, 440, 80));
     check_golden("widgets_feedback", &f);
 }
+
+/// A paper layout against the built-in simulator (fixed seed, every vehicle started),
+/// stepped explicitly for `seconds` of simulated time.
+fn paper(layout: &str, size: (u32, u32), seconds: f64) -> (Rig, Sim) {
+    let rig = Rig::new(&root().join("layouts").join(layout), size, steady());
+    let ctx = ModuleContext::detached("sim", rig.ds.clone());
+    let cfg = SimConfig { seed: 7, appear_every: 0.0, autostart: true, ..SimConfig::default() };
+    let sim = Sim::new(ctx, cfg).unwrap();
+    for _ in 0..(seconds * 20.0).round() as usize {
+        sim.step(0.05);
+    }
+    (rig, sim)
+}
+
+#[test]
+fn layout_usv() {
+    let (mut rig, _sim) = paper("usv.mocu", (1920, 1080), 20.0);
+    check_golden("layout_usv", &rig.frame());
+}
+
+#[test]
+fn layout_fig2_handheld() {
+    let (mut rig, _sim) = paper("fig2-handheld.mocu", (800, 480), 20.0);
+    check_golden("layout_fig2", &rig.frame());
+}
+
+#[test]
+fn layout_fig3_multi_usv() {
+    let (mut rig, _sim) = paper("fig3-multi-usv.mocu", (1920, 1080), 20.0);
+    check_golden("layout_fig3", &rig.frame());
+}
+
+/// Fig. 1: the payload camera animates into the large place; the midpoint and the end.
+#[test]
+fn layout_fig1_swap_animation() {
+    let (mut rig, _sim) = paper("fig1-swap.mocu", (1920, 1080), 20.0);
+    check_golden("layout_fig1", &rig.frame());
+    let display = rig.display.display_object();
+    let out = rig.ds.call_wait(
+        display,
+        "swap",
+        vec![Value::str("main"), Value::str("chart"), Value::Int(400)],
+        None,
+    );
+    assert!(out.is_accepted(), "{out:?}");
+    rig.display.clock().advance(Duration::from_millis(200));
+    rig.display.tick_animations();
+    check_golden("layout_fig1_swap_mid", &rig.frame());
+    rig.display.clock().advance(Duration::from_millis(250));
+    rig.display.tick_animations();
+    check_golden("layout_fig1_swap_end", &rig.frame());
+}
