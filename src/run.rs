@@ -1,6 +1,6 @@
 //! `mocu run`: the OCU itself. Checks the target (a layout, a profile or a bundle), starts
 //! the DataServer, the module host with the modules the profile names (or the defaults: the
-//! simulator and MAVLink), the display modules (window manager, widget renderer, map) and
+//! simulator, MAVLink and video), the display modules (window manager, widget renderer, map, video) and
 //! the layout, then runs frames at 60 Hz — in a window where there is a display, headless
 //! otherwise — until `--frames N` have passed or Ctrl-C, and prints `--dump PATH` as JSON
 //! on exit. Headless runs print a compact summary of the vehicles to stderr once a second;
@@ -131,20 +131,33 @@ pub fn registry() -> Registry {
     let mut r = Registry::new();
     mocu_sim::register(&mut r);
     mocu_mavlink::register(&mut r);
+    mocu_video::register(&mut r);
     r
 }
 
 /// The modules to start: the profile's (minus those the flags turn off), or the defaults.
 pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
     let mavlink_off = args.mavlink.eq_ignore_ascii_case("off");
+    let video_off = args.video.eq_ignore_ascii_case("off");
     let mut specs = target
         .modules
         .clone()
-        .unwrap_or_else(|| vec![ModuleSpec::new("sim"), ModuleSpec::new("mavlink")]);
-    specs.retain(|s| !(args.no_sim && s.kind == "sim" || mavlink_off && s.kind == "mavlink"));
+        .unwrap_or_else(|| {
+            vec![ModuleSpec::new("sim"), ModuleSpec::new("mavlink"), ModuleSpec::new("video")]
+        });
+    specs.retain(|s| {
+        !(args.no_sim && s.kind == "sim"
+            || mavlink_off && s.kind == "mavlink"
+            || video_off && s.kind == "video")
+    });
     for s in specs.iter_mut().filter(|s| s.kind == "mavlink") {
         if !s.settings.contains_key("address") {
             s.settings.insert("address".into(), args.mavlink.clone().into());
+        }
+    }
+    for s in specs.iter_mut().filter(|s| s.kind == "video") {
+        if !s.settings.contains_key("address") {
+            s.settings.insert("address".into(), args.video.clone().into());
         }
     }
     specs
@@ -229,6 +242,10 @@ pub fn main(args: RunArgs) -> ExitCode {
     let renderer =
         mocu_widgets::WidgetRenderer::start(&ds, library, mocu_widgets::RendererConfig::default());
     let map = mocu_widgets::MapModule::start(&ds);
+    let video = mocu_video::VideoWindows::start(&ds);
+    if let Err(e) = &video {
+        eprintln!("mocu run: cannot start the video windows: {e}");
+    }
     if let Err(e) = renderer.as_ref().and(map.as_ref()) {
         eprintln!("mocu run: cannot start the display modules: {e}");
     }
@@ -279,6 +296,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     drop(layout);
     drop(renderer);
     drop(map);
+    drop(video);
     host.stop_all();
     ds.quiesce();
     drain_events(&events, &sink);

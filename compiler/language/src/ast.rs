@@ -132,19 +132,36 @@ pub struct Primitive {
     pub span: Span,
 }
 
-/// `bind gamepad { axis left_y -> action… }`.
+/// `bind gamepad { shift left_bumper  axis left_y … -> action…  mode drive { … } }`.
 #[derive(Clone, Debug)]
 pub struct Bind {
     pub device: Ident,
+    /// `shift NAME`: the input that selects the shift layer.
+    pub shift: Option<Ident>,
+    /// Bindings active in every mode.
     pub bindings: Vec<Binding>,
+    /// `mode NAME { binding… }`: bindings active only in that mode.
+    pub modes: Vec<(Ident, Vec<Binding>)>,
     pub span: Span,
 }
 
 #[derive(Clone, Debug)]
 pub struct Binding {
+    /// Written `shift button west -> …`: active only while the shift input is held.
+    pub shift: bool,
     pub kind: Ident,
     pub input: Ident,
+    /// `deadzone 0.1`, `invert`, `hold 500ms`, `double`, … in order.
+    pub options: Vec<BindingOption>,
     pub actions: Vec<Action>,
+    pub span: Span,
+}
+
+/// One option after a binding's input name: a keyword and maybe a number.
+#[derive(Clone, Debug)]
+pub struct BindingOption {
+    pub name: Ident,
+    pub value: Option<Expr>,
     pub span: Span,
 }
 
@@ -197,12 +214,43 @@ pub struct Action {
 
 #[derive(Clone, Debug)]
 pub enum ActionKind {
-    Set { target: Expr, value: Expr },
-    Call { call: Expr },
-    Swap { a: Ident, b: Ident, duration: Option<Expr> },
-    Show { window: Ident },
-    Hide { window: Ident },
-    Alert { level: Ident, message: Expr },
+    Set {
+        target: Expr,
+        value: Expr,
+    },
+    Call {
+        call: Expr,
+    },
+    Swap {
+        a: Ident,
+        b: Ident,
+        duration: Option<Expr>,
+    },
+    Show {
+        window: Ident,
+    },
+    Hide {
+        window: Ident,
+    },
+    Alert {
+        level: Ident,
+        message: Expr,
+    },
+    /// `mode payload`: switch the binding mode.
+    Mode {
+        mode: Ident,
+    },
+    /// `select next`, `select prev`, `select path`: change the selected object.
+    Select {
+        target: SelectTarget,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub enum SelectTarget {
+    Next,
+    Prev,
+    Object(Expr),
 }
 
 #[derive(Clone, Debug)]

@@ -15,6 +15,8 @@ pub const UNKNOWN_INPUT: &str = "E0207";
 pub const UNKNOWN_PARAM: &str = "E0208";
 pub const MISSING_ARG: &str = "E0209";
 pub const BAD_PROFILE: &str = "E0210";
+pub const BAD_BINDING: &str = "E0211";
+pub const UNKNOWN_MODE: &str = "E0212";
 
 pub const NOT_A_NUMBER: &str = "E0301";
 pub const TYPE_MISMATCH: &str = "E0302";
@@ -51,6 +53,8 @@ pub const ALL: &[(&str, &str)] = &[
     (UNKNOWN_PARAM, "unknown parameter or event"),
     (MISSING_ARG, "missing required argument"),
     (BAD_PROFILE, "invalid profile"),
+    (BAD_BINDING, "binding option that does not fit its input, or `shift` without a shift input"),
+    (UNKNOWN_MODE, "`mode` action naming no declared mode"),
     (NOT_A_NUMBER, "a non-number used as a number"),
     (TYPE_MISMATCH, "type mismatch"),
     (ARG_COUNT, "wrong number of arguments"),

@@ -314,7 +314,13 @@ fn describe_expected(positives: &[Rule], found: &str) -> (String, Option<String>
             | Rule::swap_action
             | Rule::show_action
             | Rule::hide_action
-            | Rule::alert_action => "an action (`set`, `call`, `swap`, `show`, `hide` or `alert`)",
+            | Rule::alert_action
+            | Rule::mode_action
+            | Rule::select_action => {
+                "an action (`set`, `call`, `swap`, `show`, `hide`, `alert`, `mode` or `select`)"
+            }
+            Rule::binding_opt | Rule::opt_key | Rule::opt_value => "a binding option or `->`",
+            Rule::shift_decl | Rule::mode_block | Rule::shift_mark => "a binding",
             Rule::coalesce
             | Rule::range_op
             | Rule::or_op
@@ -469,25 +475,25 @@ impl Ctx {
             }
             Rule::bind_item => {
                 let device = self.next_ident(&mut inner, span);
-                let bindings = inner
-                    .map(|b| {
-                        let bspan = self.span(&b);
-                        let mut it = b.into_inner();
-                        let kind = it.next().map(|k| self.ident(k));
-                        let input = it.next().map(|n| {
-                            let s = self.span(&n);
-                            let text = n.as_str().trim_matches('"').to_string();
-                            Ident { name: text, span: s }
-                        });
-                        Binding {
-                            kind: kind.unwrap_or(Ident { name: String::new(), span: bspan }),
-                            input: input.unwrap_or(Ident { name: String::new(), span: bspan }),
-                            actions: it.map(|a| self.action(a)).collect(),
-                            span: bspan,
+                let mut shift = None;
+                let mut bindings = Vec::new();
+                let mut modes = Vec::new();
+                for q in inner {
+                    match q.as_rule() {
+                        Rule::shift_decl => {
+                            let s = self.span(&q);
+                            shift = q.into_inner().next().map(|n| self.input_name(n, s));
                         }
-                    })
-                    .collect();
-                Item::Bind(Bind { device, bindings, span })
+                        Rule::mode_block => {
+                            let s = self.span(&q);
+                            let mut it = q.into_inner();
+                            let name = self.next_ident(&mut it, s);
+                            modes.push((name, it.map(|b| self.binding(b)).collect()));
+                        }
+                        _ => bindings.push(self.binding(q)),
+                    }
+                }
+                Item::Bind(Bind { device, shift, bindings, modes, span })
             }
             Rule::menu_item => {
                 let (type_span, object_type) = match inner.next() {
@@ -628,6 +634,55 @@ impl Ctx {
         Widget { name: idents.pop(), component, at, args, handlers, span }
     }
 
+    fn input_name(&self, n: Pair<Rule>, _span: Span) -> Ident {
+        let s = self.span(&n);
+        Ident { name: n.as_str().trim_matches('"').to_string(), span: s }
+    }
+
+    fn binding(&self, b: Pair<Rule>) -> Binding {
+        let bspan = self.span(&b);
+        let mut shift = false;
+        let mut kind = None;
+        let mut input = None;
+        let mut options = Vec::new();
+        let mut actions = Vec::new();
+        for q in b.into_inner() {
+            match q.as_rule() {
+                Rule::shift_mark => shift = true,
+                Rule::ident if kind.is_none() => kind = Some(self.ident(q)),
+                Rule::input_name => input = Some(self.input_name(q, bspan)),
+                Rule::binding_opt => {
+                    let s = self.span(&q);
+                    let mut it = q.into_inner();
+                    let name = self.next_ident(&mut it, s);
+                    let value = it.next().map(|v| {
+                        let vs = self.span(&v);
+                        let negative = v.as_str().trim_start().starts_with('-');
+                        let num = v.into_inner().find(|x| x.as_rule() == Rule::number).map_or(
+                            Expr { kind: ExprKind::Number { value: 0.0, unit: None }, span: vs },
+                            |n| self.number(n),
+                        );
+                        if negative {
+                            Expr { kind: ExprKind::Unary(UnOp::Neg, Box::new(num)), span: vs }
+                        } else {
+                            num
+                        }
+                    });
+                    options.push(BindingOption { name, value, span: s });
+                }
+                _ => actions.push(self.action(q)),
+            }
+        }
+        Binding {
+            shift,
+            kind: kind.unwrap_or(Ident { name: String::new(), span: bspan }),
+            input: input.unwrap_or(Ident { name: String::new(), span: bspan }),
+            options,
+            actions,
+            span: bspan,
+        }
+    }
+
     fn param(&self, p: Pair<Rule>) -> Param {
         let span = self.span(&p);
         let rule = p.as_rule();
@@ -697,6 +752,21 @@ impl Ctx {
             }
             Rule::show_action => ActionKind::Show { window: self.next_ident(&mut it, span) },
             Rule::hide_action => ActionKind::Hide { window: self.next_ident(&mut it, span) },
+            Rule::mode_action => ActionKind::Mode { mode: self.next_ident(&mut it, span) },
+            Rule::select_action => {
+                let target = match it.next() {
+                    Some(q) if q.as_rule() == Rule::select_step => {
+                        if q.as_str() == "next" {
+                            SelectTarget::Next
+                        } else {
+                            SelectTarget::Prev
+                        }
+                    }
+                    Some(q) => SelectTarget::Object(self.expr(q)),
+                    None => SelectTarget::Next,
+                };
+                ActionKind::Select { target }
+            }
             _ => {
                 let level = self.next_ident(&mut it, span);
                 ActionKind::Alert { level, message: it.next().map_or_else(dummy, |e| self.expr(e)) }

@@ -123,6 +123,8 @@ pub enum PathBase {
     Var(String),
     /// A component parameter of type object.
     Param(String),
+    /// `selected` in an action: the object whose GUID is in `root.operator.selected`.
+    Selected,
 }
 
 impl fmt::Display for Path {
@@ -131,6 +133,7 @@ impl fmt::Display for Path {
             PathBase::Root => f.write_str("root")?,
             PathBase::SelfObject => f.write_str("self")?,
             PathBase::Var(v) | PathBase::Param(v) => f.write_str(v)?,
+            PathBase::Selected => f.write_str("selected")?,
         }
         for s in &self.segments {
             if !s.is_empty()
@@ -213,13 +216,55 @@ pub struct Shape {
     pub span: Span,
 }
 
+/// One input binding: which input, on which event, shaped how, in which mode and layer.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Binding {
     pub device: String,
     pub kind: String,
     pub input: String,
+    /// `change` (axes, wheels), or `press`, `release`, `hold`, `double` (buttons, keys).
+    #[serde(default = "change")]
+    pub event: String,
+    /// For `hold`: how long the input must be held, in milliseconds.
+    #[serde(default)]
+    pub hold_ms: f64,
+    /// The mode the binding belongs to (`mode drive { … }`); `None`: every mode.
+    #[serde(default)]
+    pub mode: Option<String>,
+    /// Written `shift …`: active only while the device's shift input is held.
+    #[serde(default)]
+    pub shift: bool,
+    /// The device's shift input (`shift left_bumper` in its `bind` block), if any.
+    #[serde(default)]
+    pub shift_input: Option<String>,
+    /// How an axis value is shaped before the actions see it.
+    #[serde(default)]
+    pub shaping: Shaping,
     pub actions: Vec<Action>,
     pub span: Span,
+}
+
+fn change() -> String {
+    "change".into()
+}
+
+/// Axis shaping, applied in this order: invert, deadzone, expo, scale, rate limit.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Shaping {
+    /// Inputs within ±deadzone read 0; the rest is rescaled to reach ±1 (0..1).
+    pub deadzone: f64,
+    /// Blend of linear and cubic response: (1 − e)·x + e·x³ (0..1).
+    pub expo: f64,
+    pub scale: f64,
+    pub invert: bool,
+    /// Largest change of the shaped value per second (0: unlimited).
+    pub rate: f64,
+}
+
+impl Default for Shaping {
+    fn default() -> Shaping {
+        Shaping { deadzone: 0.0, expo: 0.0, scale: 1.0, invert: false, rate: 0.0 }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -300,6 +345,25 @@ pub enum Action {
         message: Bound,
         span: Span,
     },
+    /// Switches the binding mode (`root.operator.mode`).
+    Mode {
+        mode: String,
+        span: Span,
+    },
+    /// Changes the selected object (`root.operator.selected`).
+    Select {
+        target: SelectTarget,
+        span: Span,
+    },
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SelectTarget {
+    /// The next (previous) child of `root.vehicles`, wrapping around.
+    Next,
+    Prev,
+    Object(Path),
 }
 
 impl Bound {

@@ -4,12 +4,14 @@
 use crate::display::{Counters, Display, DisplayError, DisplayOptions, PointerEvent};
 use crate::gpu::GpuCompositor;
 use mocu_dataserver::DataServer;
+use mocu_dataserver::Value;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, MouseButton, StartCause, WindowEvent};
+use winit::event::{ElementState, MouseButton, MouseScrollDelta, StartCause, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
+use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 /// How [`run_window`] runs.
@@ -193,6 +195,23 @@ impl ApplicationHandler<Wake> for App<'_> {
             WindowEvent::CursorLeft { .. } => {
                 display.pointer(self.cursor.0, self.cursor.1, PointerEvent::Leave);
             }
+            WindowEvent::KeyboardInput { event, .. } => {
+                if let Some(name) = key_name(&event.logical_key) {
+                    let down = event.state == ElementState::Pressed;
+                    forward_input(&self.ds, "keyboard", "key", name, Value::Bool(down));
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } => {
+                let (x, y) = match delta {
+                    MouseScrollDelta::LineDelta(x, y) => (x as f64, y as f64),
+                    MouseScrollDelta::PixelDelta(p) => (p.x / 40.0, p.y / 40.0),
+                };
+                for (axis, d) in [("vertical", y), ("horizontal", x)] {
+                    if d != 0.0 {
+                        forward_input(&self.ds, "mouse", "wheel", axis.into(), Value::Float(d));
+                    }
+                }
+            }
             WindowEvent::MouseInput { state, button, .. } => {
                 let b = match button {
                     MouseButton::Left => 0,
@@ -200,6 +219,9 @@ impl ApplicationHandler<Wake> for App<'_> {
                     MouseButton::Middle => 2,
                     _ => return,
                 };
+                let name = ["left", "right", "middle"][b as usize];
+                let down = state == ElementState::Pressed;
+                forward_input(&self.ds, "mouse", "button", name.into(), Value::Bool(down));
                 let ev = match state {
                     ElementState::Pressed => PointerEvent::Down(b),
                     ElementState::Released => PointerEvent::Up(b),
@@ -209,6 +231,56 @@ impl ApplicationHandler<Wake> for App<'_> {
             _ => {}
         }
     }
+}
+
+/// Hands a key, mouse button or wheel to the input module through
+/// `root.operator.inputs.<device>.<method>(name, value)`; nothing happens without one.
+fn forward_input(ds: &DataServer, device: &str, method: &str, name: String, value: Value) {
+    if let Some(g) = ds.resolve(&["operator", "inputs", device]) {
+        ds.call(g, method, vec![Value::str(&name), value], None, |_| {});
+    }
+}
+
+/// The layout language's name of a key (`a`, `7`, `space`, `up`, `f1`).
+fn key_name(k: &Key) -> Option<String> {
+    Some(match k {
+        Key::Character(c) => c.to_lowercase(),
+        Key::Named(n) => match n {
+            NamedKey::Space => "space",
+            NamedKey::Enter => "enter",
+            NamedKey::Escape => "escape",
+            NamedKey::Tab => "tab",
+            NamedKey::Backspace => "backspace",
+            NamedKey::Delete => "delete",
+            NamedKey::Insert => "insert",
+            NamedKey::Home => "home",
+            NamedKey::End => "end",
+            NamedKey::PageUp => "page_up",
+            NamedKey::PageDown => "page_down",
+            NamedKey::ArrowUp => "up",
+            NamedKey::ArrowDown => "down",
+            NamedKey::ArrowLeft => "left",
+            NamedKey::ArrowRight => "right",
+            NamedKey::Shift => "shift",
+            NamedKey::Control => "ctrl",
+            NamedKey::Alt => "alt",
+            NamedKey::F1 => "f1",
+            NamedKey::F2 => "f2",
+            NamedKey::F3 => "f3",
+            NamedKey::F4 => "f4",
+            NamedKey::F5 => "f5",
+            NamedKey::F6 => "f6",
+            NamedKey::F7 => "f7",
+            NamedKey::F8 => "f8",
+            NamedKey::F9 => "f9",
+            NamedKey::F10 => "f10",
+            NamedKey::F11 => "f11",
+            NamedKey::F12 => "f12",
+            _ => return None,
+        }
+        .to_string(),
+        _ => return None,
+    })
 }
 
 /// Opens an OS window and runs the display in it until closed (or for `frames` ticks).

@@ -8,7 +8,7 @@ use crate::graph::{Builder, FnRef, Shared, State, eval_once, path_text, resolve}
 use crate::lower::{Base, LowerError, Lowerer, Scope, value_ty};
 use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
 use mocu_jit as jit;
-use mocu_language::program::Action;
+use mocu_language::program::{Action, Binding, SelectTarget, Shaping};
 use mocu_value::{Guid, Value, ValueKind};
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -21,6 +21,15 @@ pub(crate) enum CompiledAction {
     Show(String),
     Hide(String),
     Alert { level: String, func: FnRef },
+    Mode(String),
+    Select(Select),
+}
+
+#[derive(Clone, Debug)]
+pub(crate) enum Select {
+    Next,
+    Prev,
+    Object { base: Base, objects: Vec<String> },
 }
 
 pub(crate) fn compile_actions(
@@ -64,6 +73,15 @@ pub(crate) fn compile_actions(
                 let e = lw.lower(&message.expr, jit::Ty::Str)?;
                 CompiledAction::Alert { level: level.clone(), func: b.add(lw, vec![e]) }
             }
+            Action::Mode { mode, .. } => CompiledAction::Mode(mode.clone()),
+            Action::Select { target, .. } => CompiledAction::Select(match target {
+                SelectTarget::Next => Select::Next,
+                SelectTarget::Prev => Select::Prev,
+                SelectTarget::Object(p) => {
+                    let (base, objects) = Lowerer::new(Scope::Plain, screen).path_names(p)?;
+                    Select::Object { base, objects }
+                }
+            }),
         });
     }
     Ok(out)
@@ -118,7 +136,7 @@ pub(crate) fn run_actions(
                     eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input).remove(0);
                 let text = format!("{}.{property}", target_text(sh, base, objects, cx));
                 let outcome =
-                    match (start(base, cx).and_then(|s| resolve(&sh.ds, s, objects)), &value) {
+                    match (start(sh, base, cx).and_then(|s| resolve(&sh.ds, s, objects)), &value) {
                         (_, None) => Err("the value is absent (no data)".to_string()),
                         (None, _) => Err(format!(
                             "`{}` does not exist (yet)",
@@ -152,7 +170,7 @@ pub(crate) fn run_actions(
                     "action",
                     &[("kind", Value::str("call")), ("target", Value::str(&text))],
                 );
-                let obj = start(base, cx).and_then(|s| resolve(&sh.ds, s, objects));
+                let obj = start(sh, base, cx).and_then(|s| resolve(&sh.ds, s, objects));
                 let absent = args.iter().position(|a| a.is_none());
                 let (Some(obj), None) = (obj, absent) else {
                     let why = match absent {
@@ -214,6 +232,14 @@ pub(crate) fn run_actions(
                 let kind = if show { "show" } else { "hide" };
                 sh.sink.record("action", &[("kind", Value::str(kind)), ("window", Value::str(w))]);
             }
+            CompiledAction::Mode(mode) => {
+                if let Some(op) = operator(sh) {
+                    let _ = sh.ds.set(op, "mode", Value::str(mode));
+                }
+                sh.sink
+                    .record("action", &[("kind", Value::str("mode")), ("mode", Value::str(mode))]);
+            }
+            CompiledAction::Select(target) => select(sh, target, cx),
             CompiledAction::Alert { level, func } => {
                 let text = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input)
                     .remove(0)
@@ -227,18 +253,82 @@ pub(crate) fn run_actions(
     alerts
 }
 
-fn start(base: &Base, cx: ActionCtx) -> Option<Guid> {
+fn start(sh: &Shared, base: &Base, cx: ActionCtx) -> Option<Guid> {
     match base {
         Base::Root => Some(Guid::ROOT),
         Base::Var(_) => cx.instance_object,
         Base::SelfObject => cx.self_obj,
+        Base::Selected => selected_object(&sh.ds),
     }
 }
 
+fn operator(sh: &Shared) -> Option<Guid> {
+    crate::graph::ensure_object(&sh.ds, Guid::ROOT, "operator", "operator").ok()
+}
+
+/// The object whose GUID is in `root.operator.selected`, if it still exists.
+pub(crate) fn selected_object(ds: &mocu_dataserver::DataServer) -> Option<Guid> {
+    let op = ds.find_child(Guid::ROOT, "operator").ok()??;
+    let g = ds.try_get(op, "selected".into())?.as_guid()?;
+    ds.exists(g).then_some(g)
+}
+
+/// `select next|prev|path`: writes `root.operator.selected` (a GUID) and
+/// `root.operator.selected_name`. Next and previous step through `root.vehicles` in order,
+/// wrapping around; with nothing selected, next is the first and previous the last.
+fn select(sh: &Arc<Shared>, target: &Select, cx: ActionCtx) {
+    let ds = &sh.ds;
+    let current = selected_object(ds);
+    let chosen = match target {
+        Select::Object { base, objects } => {
+            start(sh, base, cx).and_then(|s| resolve(ds, s, objects))
+        }
+        step => {
+            let list =
+                ds.resolve(&["vehicles"]).and_then(|v| ds.children(v).ok()).unwrap_or_default();
+            let n = list.len();
+            let at = current.and_then(|c| list.iter().position(|g| *g == c));
+            let i = match (step, at) {
+                (_, _) if n == 0 => None,
+                (Select::Next, Some(i)) => Some((i + 1) % n),
+                (Select::Next, None) => Some(0),
+                (_, Some(i)) => Some((i + n - 1) % n),
+                (_, None) => Some(n - 1),
+            };
+            i.map(|i| list[i])
+        }
+    };
+    let text = chosen.map(|g| path_text(ds, g));
+    sh.sink.record(
+        "action",
+        &[
+            ("kind", Value::str("select")),
+            ("target", Value::str(text.as_deref().unwrap_or("nothing"))),
+        ],
+    );
+    let (Some(g), Some(op)) = (chosen, operator(sh)) else {
+        let why = "there is nothing to select".to_string();
+        feedback(sh, cx.origin, "select", "refused", &why);
+        sh.sink.record(
+            "feedback",
+            &[
+                ("target", Value::str("select")),
+                ("outcome", Value::str("refused")),
+                ("reason", Value::str(&why)),
+            ],
+        );
+        return;
+    };
+    let name = ds.info(g).map(|i| i.name.to_string()).unwrap_or_default();
+    let _ = ds.set(op, "selected", Value::Guid(g));
+    let _ = ds.set(op, "selected_name", Value::str(&name));
+}
+
 fn target_text(sh: &Shared, base: &Base, objects: &[String], cx: ActionCtx) -> String {
-    let head = match start(base, cx) {
-        Some(g) => path_text(&sh.ds, g),
-        None => "self".into(),
+    let head = match (start(sh, base, cx), base) {
+        (Some(g), _) => path_text(&sh.ds, g),
+        (None, Base::Selected) => "selected (nothing selected)".into(),
+        (None, _) => "self".into(),
     };
     if objects.is_empty() { head } else { format!("{head}.{}", objects.join(".")) }
 }
@@ -312,9 +402,45 @@ pub(crate) fn publish_handlers(
     }
 }
 
-/// Publishes the layout's input bindings as methods of `root.display.bindings`, named
-/// `device.kind.input` (`gamepad.axis.left_y`), taking the input's value: the input module
-/// calls them.
+/// What the input module needs to know of one binding: which input, which event, shaping,
+/// mode and shift layer (a program [`Binding`] without its actions).
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub(crate) struct BindingSpec {
+    device: String,
+    kind: String,
+    input: String,
+    event: String,
+    hold_ms: f64,
+    mode: Option<String>,
+    shift: bool,
+    shift_input: Option<String>,
+    shaping: Shaping,
+}
+
+/// The key a compiled binding is kept under: its [`BindingSpec`] as JSON text (the State
+/// keeps `(String, actions)` pairs).
+pub(crate) fn binding_key(b: &Binding) -> String {
+    let spec = BindingSpec {
+        device: b.device.clone(),
+        kind: b.kind.clone(),
+        input: b.input.clone(),
+        event: b.event.clone(),
+        hold_ms: b.hold_ms,
+        mode: b.mode.clone(),
+        shift: b.shift,
+        shift_input: b.shift_input.clone(),
+        shaping: b.shaping.clone(),
+    };
+    serde_json::to_string(&spec).unwrap_or_default()
+}
+
+/// Publishes the layout's input bindings as objects `root.display.bindings.b1…bN` (type
+/// `binding`): `device`, `kind`, `input`, `event`, `hold_ms`, `mode`, `shift`,
+/// `shift_input`, `deadzone`, `expo`, `scale`, `invert`, `rate`, then a method
+/// `fire(value)` that runs the actions with `axis`/`delta` bound to the value, then
+/// `ready = true`. When all are there, `revision` of `root.display.bindings` goes up: the
+/// input module (or any other) rescans. The first mode declared becomes
+/// `root.operator.mode` when none is set.
 pub(crate) fn publish_bindings(sh: &Arc<Shared>, st: &mut State) {
     if st.bindings.is_empty() {
         return;
@@ -322,19 +448,51 @@ pub(crate) fn publish_bindings(sh: &Arc<Shared>, st: &mut State) {
     let Ok(obj) = crate::graph::ensure_object(&sh.ds, st.display, "bindings", "bindings") else {
         return;
     };
-    for (name, acts) in &st.bindings {
+    let ds = &sh.ds;
+    let mut first_mode = None;
+    for (i, (key, acts)) in st.bindings.iter().enumerate() {
+        let Ok(spec) = serde_json::from_str::<BindingSpec>(key) else { continue };
+        let Ok(b) = ds.create_object(obj, ObjectInfo::new(&format!("b{}", i + 1), "binding"))
+        else {
+            continue;
+        };
+        let text = |v: &str| Value::str(v);
+        let _ = ds.set(b, "device", text(&spec.device));
+        let _ = ds.set(b, "kind", text(&spec.kind));
+        let _ = ds.set(b, "input", text(&spec.input));
+        let _ = ds.set(b, "event", text(&spec.event));
+        let _ = ds.set(b, "hold_ms", Value::Float(spec.hold_ms));
+        let _ = ds.set(b, "mode", text(spec.mode.as_deref().unwrap_or("")));
+        let _ = ds.set(b, "shift", Value::Bool(spec.shift));
+        let _ = ds.set(b, "shift_input", text(spec.shift_input.as_deref().unwrap_or("")));
+        let _ = ds.set(b, "deadzone", Value::Float(spec.shaping.deadzone));
+        let _ = ds.set(b, "expo", Value::Float(spec.shaping.expo));
+        let _ = ds.set(b, "scale", Value::Float(spec.shaping.scale));
+        let _ = ds.set(b, "invert", Value::Bool(spec.shaping.invert));
+        let _ = ds.set(b, "rate", Value::Float(spec.shaping.rate));
+        if first_mode.is_none() {
+            first_mode = spec.mode.clone();
+        }
         let weak = Arc::downgrade(sh);
         let acts = acts.clone();
-        let spec = MethodSpec::new(name).param(ParamSpec::new("value", ValueKind::Float));
-        let _ = sh.ds.publish_method_fn(obj, spec, move |args| {
+        let fire = MethodSpec::new("fire").param(ParamSpec::new("value", ValueKind::Float));
+        let _ = ds.publish_method_fn(b, fire, move |args| {
             let Some(sh) = weak.upgrade() else {
                 return CallOutcome::Failed("the layout was unloaded".into());
             };
-            let cx = ActionCtx { input: args[0].as_f64(), ..ActionCtx::default() };
+            let cx = ActionCtx { input: args[0].as_f64(), origin: Some(b), ..ActionCtx::default() };
             run_actions(&sh, &acts, cx);
             CallOutcome::Accepted(vec![])
         });
+        let _ = ds.set(b, "ready", Value::Bool(true));
     }
+    if let (Some(m), Some(op)) = (first_mode, operator(sh))
+        && ds.try_get(op, "mode".into()).is_none()
+    {
+        let _ = ds.set(op, "mode", Value::str(&m));
+    }
+    let rev = ds.try_get(obj, "revision".into()).and_then(|v| v.as_f64()).unwrap_or(0.0);
+    let _ = ds.set(obj, "revision", Value::Float(rev + 1.0));
     st.owned_push(obj);
 }
 

@@ -14,6 +14,8 @@ pub enum Base {
     Var(String),
     /// `self` in a menu: the object the menu was opened on.
     SelfObject,
+    /// `selected` in an action: the object whose GUID is in `root.operator.selected`.
+    Selected,
 }
 
 /// Where an input slot's value comes from.
@@ -313,6 +315,7 @@ impl<'a> Lowerer<'a> {
             PathBase::Root => Ok((Base::Root, p.segments.clone())),
             PathBase::SelfObject => Ok((Base::SelfObject, p.segments.clone())),
             PathBase::Var(v) => Ok((Base::Var(v.clone()), p.segments.clone())),
+            PathBase::Selected => Ok((Base::Selected, p.segments.clone())),
             PathBase::Param(name) => {
                 let Scope::Widget { args, .. } = &self.scope else {
                     return Err(LowerError(format!("`{name}` is not an object here")));

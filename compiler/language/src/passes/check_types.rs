@@ -32,11 +32,13 @@ pub fn check_types(
         diags,
         top_lets: HashMap::new(),
         program: Program::default(),
+        mode_refs: Vec::new(),
     };
     t.program.files = modules.iter().map(|m| m.path.clone()).collect();
     for m in 0..modules.len() {
         t.module(m);
     }
+    t.check_modes();
     t.program
 }
 
@@ -63,6 +65,8 @@ struct Typer<'a, 'd> {
     diags: &'d mut Diagnostics,
     top_lets: HashMap<DefId, Expr>,
     program: Program,
+    /// `mode NAME` actions, checked against the declared modes at the end (E0212).
+    mode_refs: Vec<(String, Span)>,
 }
 
 /// Where windows, widgets and watches go: the program, or a template.
@@ -112,7 +116,12 @@ impl Typer<'_, '_> {
                 self.program.components.push(comp);
             }
             Item::Bind(b) => {
-                for bnd in &b.bindings {
+                let all = b.bindings.iter().map(|x| (None, x));
+                let moded = b
+                    .modes
+                    .iter()
+                    .flat_map(|(m, list)| list.iter().map(move |x| (Some(m.name.clone()), x)));
+                for (mode, bnd) in all.chain(moded).collect::<Vec<_>>() {
                     let s = match builtins::binding_value(&bnd.kind.name) {
                         Some(v) => {
                             scope.with(v, mk(Type::number(), Node::Input(v.to_string()), bnd.span))
@@ -120,10 +129,17 @@ impl Typer<'_, '_> {
                         None => scope.clone(),
                     };
                     let actions = self.actions(&bnd.actions, &s);
+                    let (event, hold_ms, shaping) = self.binding_options(bnd);
                     self.program.bindings.push(Binding {
                         device: b.device.name.clone(),
                         kind: bnd.kind.name.clone(),
                         input: bnd.input.name.clone(),
+                        event,
+                        hold_ms,
+                        mode,
+                        shift: bnd.shift,
+                        shift_input: b.shift.as_ref().map(|i| i.name.clone()),
+                        shaping,
                         actions,
                         span: bnd.span,
                     });
@@ -398,6 +414,7 @@ impl Typer<'_, '_> {
             diags: &mut scratch,
             top_lets: std::mem::take(&mut self.top_lets),
             program: Program::default(),
+            mode_refs: Vec::new(),
         };
         let r = f(&mut t);
         self.top_lets = t.top_lets;
@@ -566,6 +583,72 @@ impl Typer<'_, '_> {
         Some(Shape { kind: def.name.to_string(), args, styles, span: p.span })
     }
 
+    /// A binding's event and shaping from its options (their names and which inputs they
+    /// fit were checked by `resolve_names`; here the numbers).
+    fn binding_options(&mut self, bnd: &ast::Binding) -> (String, f64, Shaping) {
+        let mut event = if builtins::binding_value(&bnd.kind.name).is_some() {
+            "change".to_string()
+        } else {
+            "press".to_string()
+        };
+        let mut hold_ms = 0.0;
+        let mut sh = Shaping::default();
+        for o in &bnd.options {
+            let number = |t: &mut Self, want: &Type, lo: f64, hi: f64| -> f64 {
+                let Some(v) = &o.value else { return lo };
+                let b = t.lower(v, &Scope::default());
+                let n = b.constant().and_then(|c| c.number()).unwrap_or(lo);
+                if !b.ty.fits(want) || !(lo..=hi).contains(&n) {
+                    t.diags
+                        .error(
+                            codes::BAD_BINDING,
+                            v.span,
+                            format!(
+                                "`{}` takes {} from {lo} to {hi}",
+                                o.name.name,
+                                want_text(want)
+                            ),
+                        )
+                        .label("out of range");
+                    return lo;
+                }
+                n
+            };
+            match o.name.name.as_str() {
+                "deadzone" => sh.deadzone = number(self, &Type::number(), 0.0, 0.99),
+                "expo" => sh.expo = number(self, &Type::number(), 0.0, 1.0),
+                "scale" => sh.scale = number(self, &Type::number(), -1e9, 1e9),
+                "rate" => sh.rate = number(self, &Type::number(), 0.0, 1e9),
+                "invert" => sh.invert = true,
+                "hold" => {
+                    event = "hold".into();
+                    hold_ms = number(self, &Type::DURATION, 1.0, 60_000.0);
+                }
+                other => event = other.to_string(),
+            }
+        }
+        (event, hold_ms, sh)
+    }
+
+    /// Every `mode NAME` action names a mode some `bind` block declares.
+    fn check_modes(&mut self) {
+        let declared: Vec<String> =
+            self.program.bindings.iter().filter_map(|b| b.mode.clone()).collect();
+        for (m, span) in std::mem::take(&mut self.mode_refs) {
+            if !declared.contains(&m) {
+                let d = self.diags.error(
+                    codes::UNKNOWN_MODE,
+                    span,
+                    format!("no `bind` block declares a mode `{m}`"),
+                );
+                d.suggest(&m, declared.iter().map(String::as_str));
+                if d.help.is_none() {
+                    d.help("declare it with `mode NAME { bindings… }` inside a `bind` block");
+                }
+            }
+        }
+    }
+
     fn actions(&mut self, actions: &[ast::Action], scope: &Scope) -> Vec<Action> {
         let mut out = Vec::new();
         for a in actions {
@@ -637,6 +720,37 @@ impl Typer<'_, '_> {
                 ast::ActionKind::Alert { level, message } => {
                     let m = self.expect(message, scope, &Type::STRING, "an alert message");
                     out.push(Action::Alert { level: level.name.clone(), message: m, span });
+                }
+                ast::ActionKind::Mode { mode } => {
+                    self.mode_refs.push((mode.name.clone(), mode.span));
+                    out.push(Action::Mode { mode: mode.name.clone(), span });
+                }
+                ast::ActionKind::Select { target } => {
+                    let target = match target {
+                        ast::SelectTarget::Next => SelectTarget::Next,
+                        ast::SelectTarget::Prev => SelectTarget::Prev,
+                        ast::SelectTarget::Object(e) => {
+                            let t = self.lower(e, scope);
+                            match t.node {
+                                Node::Path(p) if !matches!(t.ty.kind, TypeKind::Void) => {
+                                    SelectTarget::Object(p)
+                                }
+                                _ => {
+                                    if t.ty.kind != TypeKind::Error {
+                                        self.diags
+                                            .error(
+                                                codes::NOT_A_PATH,
+                                                e.span,
+                                                "`select` needs the path of an object",
+                                            )
+                                            .help("write `select root.vehicles.usv2`, `select next` or `select prev`");
+                                    }
+                                    continue;
+                                }
+                            }
+                        }
+                    };
+                    out.push(Action::Select { target, span });
                 }
             }
         }
@@ -791,6 +905,17 @@ impl Typer<'_, '_> {
                     if let Some(v) = self.top_let(id) {
                         return Expr { span, ..v };
                     }
+                }
+                if n == "selected" {
+                    return mk(
+                        Type { kind: TypeKind::Object { object_type: None }, absent: true },
+                        Node::Path(Path {
+                            base: PathBase::Selected,
+                            segments: vec![],
+                            base_type: None,
+                        }),
+                        span,
+                    );
                 }
                 if n == "root" {
                     return mk(
@@ -1208,4 +1333,8 @@ pub fn parse_spec(s: &str) -> Option<FormatSpec> {
             None => None,
         },
     })
+}
+
+fn want_text(t: &Type) -> &'static str {
+    if t.kind == TypeKind::Duration { "a duration" } else { "a number" }
 }

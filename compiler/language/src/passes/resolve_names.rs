@@ -35,6 +35,8 @@ struct Scope {
     limit: Option<usize>,
     locals: Vec<(String, Option<crate::source::Span>)>,
     self_ok: bool,
+    /// In an action: `selected` names the selected object.
+    selected_ok: bool,
 }
 
 impl Scope {
@@ -242,7 +244,13 @@ impl Resolver<'_, '_> {
                 .get_or_insert_with(|| "devices are `gamepad`, `keyboard` and `mouse`".into());
             return;
         };
-        for bnd in &b.bindings {
+        if let Some(shift) = &b.shift {
+            let kind = if b.device.name == "keyboard" { "key" } else { "button" };
+            self.input_exists(&b.device.name, kinds, kind, shift);
+        }
+        let all = b.bindings.iter().chain(b.modes.iter().flat_map(|(_, l)| l.iter()));
+        for bnd in all {
+            self.binding_options(b, bnd);
             match kinds.iter().find(|(k, _)| *k == bnd.kind.name) {
                 None => {
                     self.diags
@@ -281,7 +289,88 @@ impl Resolver<'_, '_> {
         }
     }
 
+    /// An input name of one kind exists on the device (E0207).
+    fn input_exists(&mut self, device: &str, kinds: &[(&str, &[&str])], kind: &str, input: &Ident) {
+        let names: &[&str] = kinds.iter().find(|(k, _)| *k == kind).map_or(&[], |(_, n)| n);
+        let ok = if kind == "key" {
+            builtins::is_key(&input.name)
+        } else {
+            names.contains(&input.name.as_str())
+        };
+        if !ok {
+            self.diags
+                .error(
+                    codes::UNKNOWN_INPUT,
+                    input.span,
+                    format!("there is no {device} {kind} `{}`", input.name),
+                )
+                .suggest(&input.name, names.iter().copied());
+        }
+    }
+
+    /// Options fit the input: shaping on axes and wheels, events on buttons and keys, each
+    /// at most once, one event per binding; `shift …` needs a shift input (E0211).
+    fn binding_options(&mut self, b: &Bind, bnd: &Binding) {
+        let axis = builtins::binding_value(&bnd.kind.name).is_some();
+        let mut seen: Vec<&str> = Vec::new();
+        let mut events = 0;
+        for o in &bnd.options {
+            let n = o.name.name.as_str();
+            let (shaping, numeric) = match n {
+                "deadzone" | "expo" | "scale" | "rate" => (true, true),
+                "invert" => (true, false),
+                "hold" => (false, true),
+                _ => (false, false),
+            };
+            let why = if seen.contains(&n) {
+                Some(format!("`{n}` is given twice"))
+            } else if shaping && !axis {
+                Some(format!("`{n}` shapes an axis; a {} has no value to shape", bnd.kind.name))
+            } else if !shaping && axis {
+                Some(format!(
+                    "`{n}` is an event of buttons and keys, not of {} {}",
+                    if bnd.kind.name == "axis" { "an" } else { "a" },
+                    bnd.kind.name
+                ))
+            } else if numeric && o.value.is_none() {
+                Some(format!(
+                    "`{n}` needs a value, e.g. `{n} {}`",
+                    if n == "hold" { "500ms" } else { "0.1" }
+                ))
+            } else if !numeric && o.value.is_some() {
+                Some(format!("`{n}` takes no value"))
+            } else {
+                None
+            };
+            if !shaping {
+                events += 1;
+            }
+            seen.push(n);
+            if let Some(why) = why {
+                self.diags.error(codes::BAD_BINDING, o.span, why);
+            } else if events > 1 {
+                self.diags
+                    .error(codes::BAD_BINDING, o.span, "a binding reacts to one event")
+                    .help("write one binding per event: `button south -> …` and `button south double -> …`");
+            }
+        }
+        if bnd.shift && b.shift.is_none() {
+            self.diags
+                .error(
+                    codes::BAD_BINDING,
+                    bnd.span,
+                    format!(
+                        "`shift` binding, but this `bind {}` names no shift input",
+                        b.device.name
+                    ),
+                )
+                .help("add e.g. `shift left_bumper` at the top of the `bind` block");
+        }
+    }
+
     fn actions(&mut self, actions: &[Action], scope: &Scope) {
+        let with_selected = Scope { selected_ok: true, ..scope.clone() };
+        let scope = &with_selected;
         for a in actions {
             match &a.kind {
                 ActionKind::Set { target, value } => {
@@ -299,6 +388,10 @@ impl Resolver<'_, '_> {
                 ActionKind::Show { window } | ActionKind::Hide { window } => {
                     self.window_ref(window, scope.module)
                 }
+                ActionKind::Mode { .. }
+                | ActionKind::Select { target: SelectTarget::Next }
+                | ActionKind::Select { target: SelectTarget::Prev } => {}
+                ActionKind::Select { target: SelectTarget::Object(e) } => self.expr(e, scope),
                 ActionKind::Alert { level, message } => {
                     if !builtins::ALERT_LEVELS.contains(&level.name.as_str()) {
                         self.diags
@@ -331,6 +424,14 @@ impl Resolver<'_, '_> {
             return;
         }
         if name == "root" {
+            return;
+        }
+        if name == "selected" {
+            if !scope.selected_ok {
+                self.diags
+                    .error(codes::UNKNOWN_NAME, span, "`selected` is only known in actions")
+                    .help("`selected` is the object in `root.operator.selected`: use it in `set`, `call` or `select`");
+            }
             return;
         }
         if self.defs.namespace(self.modules, scope.module, name).is_some() {
