@@ -59,6 +59,9 @@ pub struct RunArgs {
     /// Evaluate layout expressions with the reference interpreter instead of the JIT.
     #[arg(long)]
     pub interpret: bool,
+    /// Replay this input script as a virtual gamepad (docs/input.md), for tests and trials.
+    #[arg(long, value_name = "FILE")]
+    pub input_script: Option<PathBuf>,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -132,6 +135,7 @@ pub fn registry() -> Registry {
     mocu_sim::register(&mut r);
     mocu_mavlink::register(&mut r);
     mocu_video::register(&mut r);
+    mocu_input::register(&mut r);
     r
 }
 
@@ -158,6 +162,15 @@ pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
     for s in specs.iter_mut().filter(|s| s.kind == "video") {
         if !s.settings.contains_key("address") {
             s.settings.insert("address".into(), args.video.clone().into());
+        }
+    }
+    // Operator input always runs (a profile may configure it as `[modules.input]`).
+    if !specs.iter().any(|s| s.kind == "input") {
+        specs.push(ModuleSpec::new("input"));
+    }
+    if let Some(script) = &args.input_script {
+        for s in specs.iter_mut().filter(|s| s.kind == "input") {
+            s.settings.insert("script".into(), script.display().to_string().into());
         }
     }
     specs
