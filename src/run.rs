@@ -9,7 +9,7 @@
 use mocu_dataserver::{DataServer, Guid, Value};
 use mocu_display::{BackendChoice, Display, DisplayOptions, WindowOptions, run_window};
 use mocu_host::{Events, HostEvent, Level, ModuleHost, ModuleSpec, Registry};
-use mocu_layout::{EventSink, JsonlLog, Layout, LayoutConfig, NullSink};
+use mocu_layout::{EventSink, JsonlLog, LayoutConfig, NullSink};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -143,12 +143,9 @@ pub fn registry() -> Registry {
 pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
     let mavlink_off = args.mavlink.eq_ignore_ascii_case("off");
     let video_off = args.video.eq_ignore_ascii_case("off");
-    let mut specs = target
-        .modules
-        .clone()
-        .unwrap_or_else(|| {
-            vec![ModuleSpec::new("sim"), ModuleSpec::new("mavlink"), ModuleSpec::new("video")]
-        });
+    let mut specs = target.modules.clone().unwrap_or_else(|| {
+        vec![ModuleSpec::new("sim"), ModuleSpec::new("mavlink"), ModuleSpec::new("video")]
+    });
     specs.retain(|s| {
         !(args.no_sim && s.kind == "sim"
             || mavlink_off && s.kind == "mavlink"
@@ -242,7 +239,6 @@ pub fn main(args: RunArgs) -> ExitCode {
     host.start_all(&module_specs(&target, &args));
 
     // The display's modules, then the layout: each finds the others through root.display.
-    let program = &target.bundle.layouts[chosen].program;
     let library =
         match mocu_widgets::Library::compile(&all_components(&target.bundle), !args.interpret) {
             Ok(l) => l,
@@ -253,28 +249,54 @@ pub fn main(args: RunArgs) -> ExitCode {
         };
     let _ = mocu_display::ensure_display_object(&ds, screen.0, screen.1);
     let renderer =
-        mocu_widgets::WidgetRenderer::start(&ds, library, mocu_widgets::RendererConfig::default());
+        mocu_widgets::WidgetRenderer::start(&ds, library, mocu_widgets::RendererConfig::default())
+            .map(Arc::new);
     let map = mocu_widgets::MapModule::start(&ds);
     let video = mocu_video::VideoWindows::start(&ds);
     if let Err(e) = &video {
         eprintln!("mocu run: cannot start the video windows: {e}");
     }
-    if let Err(e) = renderer.as_ref().and(map.as_ref()) {
+    if let Err(e) = renderer.as_ref().map(|_| ()).and(map.as_ref().map(|_| ())) {
         eprintln!("mocu run: cannot start the display modules: {e}");
     }
-    let config = LayoutConfig {
-        screen: (screen.0 as f64, screen.1 as f64),
-        jit: !args.interpret,
-        name: target.bundle.layouts[chosen].path.clone(),
-        ..LayoutConfig::default()
+    // The layout runs under the reloader: a saved edit swaps in between two frames.
+    let jit = !args.interpret;
+    let hook = renderer.as_ref().ok().cloned().map(|r| {
+        Arc::new(move |p: &mocu_language::Program| match mocu_widgets::Library::compile(p, jit) {
+            Ok(lib) => r.replace_library(lib),
+            Err(e) => eprintln!("mocu: components: {e}"),
+        }) as Arc<dyn Fn(&mocu_language::Program) + Send + Sync>
+    });
+    let options = mocu_hotreload::ReloaderOptions {
+        config: LayoutConfig {
+            screen: (screen.0 as f64, screen.1 as f64),
+            jit,
+            name: target.bundle.layouts[chosen].path.clone(),
+            ..LayoutConfig::default()
+        },
+        layout: args.layout.clone(),
+        on_components: hook,
     };
-    let layout = match Layout::load(&ds, program, config, sink.clone()) {
+    let layout = match mocu_hotreload::Reloader::start(
+        &ds,
+        &args.target,
+        &target.bundle,
+        options,
+        sink.clone(),
+    ) {
         Ok(l) => l,
         Err(e) => {
             eprintln!("mocu run: {e}");
             return ExitCode::from(1);
         }
     };
+    if args.no_watch
+        || mocu_language::bundle::is_bundle(&std::fs::read(&args.target).unwrap_or_default())
+    {
+        // Fielded use, or a built bundle (no sources): nothing to watch.
+    } else if let Err(e) = layout.watch() {
+        eprintln!("mocu: {e}; hot reload is off");
+    }
     eprintln!(
         "mocu: running {} ({})",
         target.bundle.layouts[chosen].path,
