@@ -386,6 +386,224 @@ impl SkiaCanvas {
     }
 }
 
+impl SkiaCanvas {
+    /// The uniform scale of the device transform when it is a translate + uniform
+    /// positive scale (the analytic rasterisers' precondition).
+    fn uniform_scale(&self) -> Option<f32> {
+        let dev = self.device();
+        (dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6).then_some(dev.sx)
+    }
+
+    /// Blends `color` at coverage `k` (0..=1) onto pixel `i` of the pixmap.
+    #[inline]
+    fn cover(px: &mut [[u8; 4]], i: usize, pre: [u32; 4], k: f32) {
+        let k = (k * 255.0 + 0.5) as u32;
+        if k == 0 {
+            return;
+        }
+        let src = if k >= 255 {
+            pre.map(|v| v as u8)
+        } else {
+            [pre[0] * k, pre[1] * k, pre[2] * k, pre[3] * k].map(|v| div255(v) as u8)
+        };
+        crate::compose::over_px(&mut px[i], src);
+    }
+
+    fn premultiplied(color: Color) -> [u32; 4] {
+        let a = color.a as u32;
+        [div255(color.r as u32 * a), div255(color.g as u32 * a), div255(color.b as u32 * a), a]
+    }
+
+    /// A stroked circular arc with analytic coverage (butt or round caps): the band
+    /// between two radii, cut by the two radial edges. Gauge scales are made of these;
+    /// tiny-skia strokes them by flattening and supersampling, several times slower.
+    fn arc_band(
+        &mut self,
+        c: Point,
+        radius: f32,
+        start: f32,
+        sweep: f32,
+        stroke: &Stroke,
+        color: Color,
+    ) -> Option<()> {
+        let s = self.uniform_scale()?;
+        if stroke.dash.is_some() || stroke.cap == LineCap::Square {
+            return None;
+        }
+        if color.a == 0 || sweep == 0.0 || stroke.width <= 0.0 {
+            return Some(());
+        }
+        if sweep.abs() >= std::f32::consts::TAU - 1e-4 {
+            return self.ring(c, radius + stroke.width / 2.0, radius - stroke.width / 2.0, color);
+        }
+        let (a0, sw) = if sweep < 0.0 { (start + sweep, -sweep) } else { (start, sweep) };
+        let a1 = a0 + sw;
+        let c = self.device().apply(c);
+        let hw = stroke.width * s / 2.0;
+        let rm = radius * s;
+        let (ro, ri) = (rm + hw, (rm - hw).max(0.0));
+        let round = stroke.cap == LineCap::Round;
+        let (u0, u1) = ((a0.cos(), a0.sin()), (a1.cos(), a1.sin()));
+        let caps = [(c.x + u0.0 * rm, c.y + u0.1 * rm), (c.x + u1.0 * rm, c.y + u1.1 * rm)];
+        let bbox = IRect::covering(Rect::new(
+            c.x - ro - 1.0,
+            c.y - ro - 1.0,
+            2.0 * ro + 2.0,
+            2.0 * ro + 2.0,
+        ))
+        .intersect(&self.state.clip);
+        if bbox.is_empty() {
+            return Some(());
+        }
+        let pre = Self::premultiplied(color);
+        let w = self.pixmap.width() as usize;
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        let cov = |r: f32, d: f32| (r - d + 0.5).clamp(0.0, 1.0);
+        let small = sw <= std::f32::consts::PI;
+        let outer2 = (ro + 0.5) * (ro + 0.5);
+        for y in bbox.y..bbox.bottom() {
+            let dy = y as f32 + 0.5 - c.y;
+            let dy2 = dy * dy;
+            if dy2 >= outer2 {
+                continue;
+            }
+            let half = (outer2 - dy2).sqrt();
+            let x0 = ((c.x - half).floor() as i32).max(bbox.x);
+            let x1 = ((c.x + half).ceil() as i32).min(bbox.right());
+            let hollow = if ri > 0.5 && (ri - 0.5) * (ri - 0.5) > dy2 {
+                ((ri - 0.5) * (ri - 0.5) - dy2).sqrt()
+            } else {
+                -1.0
+            };
+            let row = y as usize * w;
+            let mut x = x0;
+            while x < x1 {
+                let dx = x as f32 + 0.5 - c.x;
+                if dx.abs() < hollow && !round {
+                    x = ((c.x + hollow - 0.5).floor() as i32 + 1).max(x + 1);
+                    continue;
+                }
+                let d = (dx * dx + dy2).sqrt();
+                let radial = cov(ro, d) - if ri > 0.0 { cov(ri, d) } else { 0.0 };
+                let mut k = 0.0f32;
+                if radial > 0.0 {
+                    // Signed distances to the start and end edges (lines through the centre).
+                    let e0 = (u0.0 * dy - u0.1 * dx + 0.5).clamp(0.0, 1.0);
+                    let e1 = (dx * u1.1 - dy * u1.0 + 0.5).clamp(0.0, 1.0);
+                    // At most half a turn the sector is the cone between both edges;
+                    // more, it is everything but the cone of the rest of the turn.
+                    let ang = if small { e0.min(e1) } else { e0.max(e1) };
+                    k = radial * ang;
+                }
+                if round {
+                    for (cx, cy) in caps {
+                        let dd = ((x as f32 + 0.5 - cx).powi(2) + (dy + c.y - cy).powi(2)).sqrt();
+                        k = k.max(cov(hw, dd));
+                    }
+                }
+                if k > 0.0 {
+                    Self::cover(px, row + x as usize, pre, k.min(1.0));
+                }
+                x += 1;
+            }
+        }
+        Some(())
+    }
+
+    /// Disjoint straight segments (each subpath one `move`+`line`), stroked with analytic
+    /// coverage: ticks, needles' lines, crosses, grid lines. `None` when the path or the
+    /// transform is not of that kind.
+    fn segments(&mut self, path: &Path, stroke: &Stroke, color: Color) -> Option<()> {
+        let s = self.uniform_scale()?;
+        if stroke.dash.is_some() {
+            return None;
+        }
+        let els = path.elements();
+        if els.is_empty() || els.len() % 2 != 0 || els.len() > 512 {
+            return None;
+        }
+        let mut segs = Vec::with_capacity(els.len() / 2);
+        for pair in els.chunks_exact(2) {
+            match pair {
+                [crate::path::PathEl::MoveTo(a), crate::path::PathEl::LineTo(b)] => {
+                    segs.push((*a, *b))
+                }
+                _ => return None,
+            }
+        }
+        if color.a == 0 || stroke.width <= 0.0 {
+            return Some(());
+        }
+        let dev = self.device();
+        let hw = stroke.width * s / 2.0;
+        let pre = Self::premultiplied(color);
+        let clip = self.state.clip;
+        let w = self.pixmap.width() as usize;
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        for (a, b) in segs {
+            let (a, b) = (dev.apply(a), dev.apply(b));
+            let (vx, vy) = (b.x - a.x, b.y - a.y);
+            let len = (vx * vx + vy * vy).sqrt();
+            if len < 1e-4 {
+                continue;
+            }
+            let (ux, uy) = (vx / len, vy / len);
+            // Caps extend the segment: square by hw, round (as capsules) by hw.
+            let ext = match stroke.cap {
+                LineCap::Butt => 0.0,
+                LineCap::Square | LineCap::Round => hw,
+            };
+            let pad = hw + 1.0;
+            let bbox = IRect::covering(Rect::new(
+                a.x.min(b.x) - pad - ext,
+                a.y.min(b.y) - pad - ext,
+                vx.abs() + 2.0 * (pad + ext),
+                vy.abs() + 2.0 * (pad + ext),
+            ))
+            .intersect(&clip);
+            if bbox.is_empty() {
+                continue;
+            }
+            let thin = (2.0 * hw).min(1.0);
+            for y in bbox.y..bbox.bottom() {
+                let py = y as f32 + 0.5 - a.y;
+                // The columns near the line on this row.
+                let (xa, xb) = if uy.abs() > 1e-3 {
+                    let xc = a.x + py * ux / uy;
+                    let span = (pad + ext) / uy.abs();
+                    ((xc - span).floor() as i32, (xc + span).ceil() as i32)
+                } else {
+                    (bbox.x, bbox.right())
+                };
+                let row = y as usize * w;
+                for x in xa.max(bbox.x)..xb.min(bbox.right()) {
+                    let pxv = x as f32 + 0.5 - a.x;
+                    let along = pxv * ux + py * uy;
+                    let across = (pxv * uy - py * ux).abs();
+                    let k = match stroke.cap {
+                        LineCap::Round => {
+                            let t = along.clamp(0.0, len);
+                            let d = ((pxv - ux * t).powi(2) + (py - uy * t).powi(2)).sqrt();
+                            (hw + 0.5 - d).clamp(0.0, thin)
+                        }
+                        _ => {
+                            let ka = (along + ext + 0.5)
+                                .clamp(0.0, 1.0)
+                                .min((len + ext - along + 0.5).clamp(0.0, 1.0));
+                            let kp = (hw + 0.5 - across).clamp(0.0, thin);
+                            ka * kp
+                        }
+                    };
+                    if k > 0.0 {
+                        Self::cover(px, row + x as usize, pre, k);
+                    }
+                }
+            }
+        }
+        Some(())
+    }
+}
+
 impl Canvas for SkiaCanvas {
     fn fill_circle(&mut self, c: Point, radius: f32, color: Color) {
         if self.ring(c, radius, 0.0, color).is_none() {
@@ -397,6 +615,20 @@ impl Canvas for SkiaCanvas {
         let h = width / 2.0;
         if self.ring(c, radius + h, (radius - h).max(0.0), color).is_none() {
             self.stroke_path(&Path::circle(c, radius), &Stroke::new(width), &Brush::Solid(color));
+        }
+    }
+
+    fn stroke_arc(
+        &mut self,
+        c: Point,
+        radius: f32,
+        start: f32,
+        sweep: f32,
+        stroke: &Stroke,
+        color: Color,
+    ) {
+        if self.arc_band(c, radius, start, sweep, stroke, color).is_none() {
+            self.stroke_path(&Path::arc(c, radius, start, sweep), stroke, &Brush::Solid(color));
         }
     }
 
@@ -470,6 +702,11 @@ impl Canvas for SkiaCanvas {
     }
 
     fn stroke_path(&mut self, path: &Path, stroke: &Stroke, brush: &Brush) {
+        if let Brush::Solid(color) = brush
+            && self.segments(path, stroke, *color).is_some()
+        {
+            return;
+        }
         let Some(p) = path.to_skia() else { return };
         if !self.visible(path_bounds(&p), stroke.width) {
             return;

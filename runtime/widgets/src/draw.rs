@@ -61,6 +61,19 @@ pub fn draw_shapes(c: &mut dyn Canvas, shapes: &[ShapeOut], outs: &[Option<Value
             _ => None,
         };
         match (s.kind.as_str(), path) {
+            // A stroked-only arc (a gauge scale) takes the canvas's arc fast path.
+            ("arc", Some(_)) if fill.is_none() => {
+                if let (Some([cx, cy, r, start, sweep]), Some(st)) = (nums.as_deref(), stroke) {
+                    c.stroke_arc(
+                        Point::new(*cx, *cy),
+                        r.max(0.0),
+                        start.to_radians(),
+                        sweep.to_radians(),
+                        &Stroke::new(width),
+                        st,
+                    );
+                }
+            }
             ("text", _) => {
                 let (Some(x), Some(y)) = (num(&args[0]), num(&args[1])) else { continue };
                 let Some(text) = args.get(2).and_then(|v| v.as_ref()).map(|v| v.to_string()) else {
