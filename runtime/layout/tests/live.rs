@@ -305,11 +305,17 @@ fn a_binding_writes_a_goal_and_a_refused_write_becomes_feedback() {
     );
     let layout = Layout::load(&ds, &p, config(true), sink.clone()).unwrap();
     let bindings = ds.resolve(&["display", "bindings"]).unwrap();
-    assert!(
-        ds.call_wait(bindings, "gamepad.axis.left_y", vec![Value::Float(1.0)], None).is_accepted()
-    );
+    // Each binding is an object (device, kind, input, …) with a `fire(value)` method.
+    let binding = |input: &str| {
+        ds.children(bindings)
+            .unwrap()
+            .into_iter()
+            .find(|b| ds.try_get(*b, "input".into()) == Some(Value::str(input)))
+            .unwrap()
+    };
+    assert!(ds.call_wait(binding("left_y"), "fire", vec![Value::Float(1.0)], None).is_accepted());
     assert_eq!(ds.get(nav, "goal_throttle").unwrap(), Value::Float(100.0));
-    ds.call_wait(bindings, "keyboard.key.w", vec![Value::Float(1.0)], None);
+    ds.call_wait(binding("w"), "fire", vec![Value::Float(1.0)], None);
     assert_eq!(ds.get(nav, "goal_throttle").unwrap(), Value::Float(100.0), "out of range: refused");
     let fb = sink.of("feedback");
     let reason = fb[0].iter().find(|(k, _)| k == "reason").unwrap().1.to_string();
