@@ -238,3 +238,23 @@ fn with_nothing_selected_a_goal_write_is_refused_feedback_not_a_crash() {
     let text = format!("{fb:?}");
     assert!(text.contains("refused") && text.contains("nothing selected"), "{text}");
 }
+
+#[test]
+fn the_stdlib_toast_list_shows_the_latest_outcomes_by_default() {
+    let text = r#"
+      use "stdlib/alerts.mocu"
+      window hud { layer 10 rect 0 0 100% 100% }
+      in hud { toasts: ToastList { at 20 160 560 96 } }
+      bind gamepad { button south -> call selected.start_engine() }
+    "#;
+    let mut r = rig(text, 30.0, Arc::new(NullSink));
+    let _toasts = mocu_input::Toasts::start(&r.ds, &r.ds.serial_executor(), 5).unwrap();
+    r.tap(0, "south");
+    r.settle();
+    let w = r.ds.resolve(&["display", "hud", "toasts"]).unwrap();
+    let props = r.ds.properties(w).unwrap();
+    let first =
+        r.ds.get(w, "first").map(|v| v.to_string()).unwrap_or_else(|_| format!("{props:?}"));
+    assert!(first.contains("refused"), "{first}");
+    assert_eq!(r.ds.get(w, "critical1").unwrap(), Value::Bool(true), "refused is red");
+}

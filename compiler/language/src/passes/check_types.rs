@@ -451,12 +451,12 @@ impl Typer<'_, '_> {
                     &format!("`{}` of {}", a.name.name, w.component.name),
                 )
             };
-            args.push(Arg { name: a.name.name.clone(), value: b });
+            args.push(Arg { name: a.name.name.clone(), value: read_as(b, ty) });
         }
-        for (name, _, default) in params {
+        for (name, ty, default) in params {
             if !args.iter().any(|a: &Arg| a.name == name) {
                 if let Some(d) = default {
-                    args.push(Arg { name, value: d });
+                    args.push(Arg { name, value: read_as(d, &ty) });
                 }
             }
         }
@@ -1337,4 +1337,17 @@ pub fn parse_spec(s: &str) -> Option<FormatSpec> {
 
 fn want_text(t: &Type) -> &'static str {
     if t.kind == TypeKind::Duration { "a duration" } else { "a number" }
+}
+
+/// A path the schema does not type (dynamic), given to a parameter of a value type, is read
+/// as that type (a `string?` parameter reads a string), absent when it is something else.
+fn read_as(mut b: Bound, ty: &Type) -> Bound {
+    let value = matches!(
+        ty.kind,
+        TypeKind::String | TypeKind::Number { .. } | TypeKind::Bool | TypeKind::Colour
+    );
+    if b.expr.ty.kind == TypeKind::Dynamic && value {
+        b.expr.ty = Type { kind: ty.kind.clone(), absent: true };
+    }
+    b
 }
