@@ -217,7 +217,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             }
         },
     };
-    let Some(chosen) = choose_layout(&target, args.layout.as_deref()) else {
+    let Some(chosen) = mocu_hotreload::choose(&target.bundle, args.layout.as_deref()) else {
         let names: Vec<&str> = target.bundle.layouts.iter().map(|l| l.path.as_str()).collect();
         eprintln!(
             "mocu run: no layout `{}` in the profile (it has: {})",
@@ -345,20 +345,6 @@ pub fn main(args: RunArgs) -> ExitCode {
         }
     }
     code
-}
-
-/// The layout to show: `--layout NAME` (file name or stem) or the first.
-fn choose_layout(target: &Target, name: Option<&str>) -> Option<usize> {
-    let layouts = &target.bundle.layouts;
-    match name {
-        None => (!layouts.is_empty()).then_some(0),
-        Some(n) => layouts.iter().position(|l| {
-            let p = Path::new(&l.path);
-            l.path == n
-                || p.file_name().is_some_and(|f| f == n)
-                || p.file_stem().is_some_and(|f| f == n)
-        }),
-    }
 }
 
 /// Every component of every layout of the bundle, once (the first definition wins).

@@ -92,6 +92,16 @@ impl Streams {
 }
 
 impl DataServer {
+    fn listener(&self, listener: Guid) -> Result<Arc<Listener>, DsError> {
+        self.inner
+            .streams
+            .listeners
+            .pin()
+            .get(&listener)
+            .cloned()
+            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })
+    }
+
     /// Publishes a listener object under `parent`.
     pub fn create_listener(&self, parent: Guid, name: &str) -> Result<Guid, DsError> {
         let g = self.create_object(parent, ObjectInfo::new(name, LISTENER_TYPE))?;
@@ -111,14 +121,7 @@ impl DataServer {
         capacity: usize,
     ) -> Result<Guid, DsError> {
         let method = PropName::new(method);
-        let l = self
-            .inner
-            .streams
-            .listeners
-            .pin()
-            .get(&listener)
-            .cloned()
-            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })?;
+        let l = self.listener(listener)?;
         let run_on = {
             let o = self.object(receiver)?;
             let os = o.state.read();
@@ -161,14 +164,7 @@ impl DataServer {
     /// Sends one message to every receiver of a listener, in order; returns how many
     /// receivers it was queued for.
     pub fn send(&self, listener: Guid, args: Vec<Value>) -> Result<usize, DsError> {
-        let l = self
-            .inner
-            .streams
-            .listeners
-            .pin()
-            .get(&listener)
-            .cloned()
-            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })?;
+        let l = self.listener(listener)?;
         let msg: Arc<[Value]> = args.into();
         let receivers = l.receivers.read().clone();
         let mut sent = 0;
@@ -232,14 +228,7 @@ impl DataServer {
 
     /// The receivers of a listener (their association objects).
     pub fn receivers(&self, listener: Guid) -> Result<Vec<Guid>, DsError> {
-        let l = self
-            .inner
-            .streams
-            .listeners
-            .pin()
-            .get(&listener)
-            .cloned()
-            .ok_or_else(|| DsError::NotAListener { object: self.obj_ref(listener) })?;
+        let l = self.listener(listener)?;
         Ok(l.receivers.read().iter().map(|r| r.assoc).collect())
     }
 }

@@ -19,4 +19,4 @@ mod banner;
 mod reloader;
 mod watcher;
 
-pub use reloader::{Outcome, Reloader, ReloaderOptions};
+pub use reloader::{Outcome, Reloader, ReloaderOptions, choose};

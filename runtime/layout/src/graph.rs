@@ -800,6 +800,27 @@ impl Shared {
         }
     }
 
+    /// Template instances name their objects `name@object`.
+    fn instance_suffix(&self, st: &State, instance: Option<usize>) -> Option<String> {
+        instance
+            .and_then(|i| st.instances[i].as_ref())
+            .map(|i| self.ds.info(i.object).map(|inf| inf.name.to_string()).unwrap_or_default())
+    }
+
+    /// The dotted-path text of an object path from a base (`root.vehicles.usv1.cameras.drive`).
+    fn path_from(
+        &self,
+        st: &State,
+        base: &Base,
+        objs: &[String],
+        instance: Option<usize>,
+    ) -> String {
+        match Self::start_of(st, base, instance) {
+            Some(Start::Object(o)) => format!("{}.{}", path_text(&self.ds, o), objs.join(".")),
+            _ => format!("root.{}", objs.join(".")),
+        }
+    }
+
     pub(crate) fn publish_windows(
         self: &Arc<Self>,
         st: &mut State,
@@ -808,9 +829,7 @@ impl Shared {
         first_order: usize,
     ) -> Result<Vec<(Guid, usize)>, LoadError> {
         let mut made = Vec::new();
-        let suffix = instance
-            .and_then(|i| st.instances[i].as_ref())
-            .map(|i| self.ds.info(i.object).map(|inf| inf.name.to_string()).unwrap_or_default());
+        let suffix = self.instance_suffix(st, instance);
         let mut order = first_order + st.windows.len();
         for w in windows {
             let name = match &suffix {
@@ -826,12 +845,7 @@ impl Shared {
             let _ = self.ds.set(g, "revision", Value::Int(0));
             let _ = self.ds.set(g, "clip", Value::Bool(true));
             if let Some((base, objs)) = &w.source {
-                let text = match Self::start_of(st, base, instance) {
-                    Some(Start::Object(o)) => {
-                        format!("{}.{}", path_text(&self.ds, o), objs.join("."))
-                    }
-                    _ => format!("root.{}", objs.join(".")),
-                };
+                let text = self.path_from(st, base, objs, instance);
                 let _ = self.ds.set(g, "source", Value::str(&text));
             }
             order += 1;
@@ -887,9 +901,7 @@ impl Shared {
         first_order: usize,
     ) -> Result<Vec<(Guid, usize)>, LoadError> {
         let mut made = Vec::new();
-        let suffix = instance
-            .and_then(|i| st.instances[i].as_ref())
-            .map(|i| self.ds.info(i.object).map(|inf| inf.name.to_string()).unwrap_or_default());
+        let suffix = self.instance_suffix(st, instance);
         for (i, w) in widgets.iter().enumerate() {
             let order = first_order + i;
             let window_name = match &suffix {
@@ -916,12 +928,7 @@ impl Shared {
             let _ = self.ds.set(g, "native", Value::Bool(w.native));
             let _ = self.ds.set(g, "order", Value::Int(order as i64));
             for (arg, base, objs) in &w.objects {
-                let text = match Self::start_of(st, base, instance) {
-                    Some(Start::Object(o)) => {
-                        format!("{}.{}", path_text(&self.ds, o), objs.join("."))
-                    }
-                    _ => format!("root.{}", objs.join(".")),
-                };
+                let text = self.path_from(st, base, objs, instance);
                 let _ = self.ds.set(g, arg.as_str(), Value::str(&text));
             }
             let targets = w.outputs.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
