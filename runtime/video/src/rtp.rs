@@ -253,6 +253,36 @@ pub fn annexb_nals(data: &[u8]) -> Vec<&[u8]> {
     out
 }
 
+/// Splits an H.264 Annex B elementary stream (`ffmpeg -f h264`) into access units, each
+/// in Annex B form: a unit starts at an access unit delimiter, SEI or parameter set that
+/// follows a slice, or at a slice whose `first_mb_in_slice` is 0.
+pub fn access_units(stream: &[u8]) -> Vec<Vec<u8>> {
+    let mut out: Vec<Vec<u8>> = Vec::new();
+    let mut cur: Vec<u8> = Vec::new();
+    let mut has_slice = false;
+    for nal in annexb_nals(stream) {
+        let Some(&h) = nal.first() else { continue };
+        let t = h & 0x1f;
+        let is_slice = t == 1 || t == 5;
+        let starts = match t {
+            6..=9 => has_slice,
+            1 | 5 => has_slice && nal.get(1).is_some_and(|b| b & 0x80 != 0),
+            _ => false,
+        };
+        if starts && !cur.is_empty() {
+            out.push(std::mem::take(&mut cur));
+            has_slice = false;
+        }
+        has_slice |= is_slice;
+        cur.extend_from_slice(&START);
+        cur.extend_from_slice(nal);
+    }
+    if !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
