@@ -97,8 +97,7 @@ impl EvalCtx {
     }
 
     pub(crate) fn fmt_text(&mut self, h: u64) {
-        let s = self.strings[h as usize].clone();
-        self.buf.push_str(&s);
+        self.buf.push_str(&self.strings[h as usize]);
     }
 
     pub(crate) fn fmt_num(&mut self, x: f64, spec: NumFormat) {
