@@ -16,6 +16,7 @@ mod convert;
 pub mod events;
 pub mod graph;
 pub mod lower;
+mod menu;
 mod reload;
 mod watch;
 

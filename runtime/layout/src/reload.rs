@@ -255,6 +255,7 @@ impl Shared {
             }
             st.items.push(rec);
         }
+        crate::menu::publish_menus(self, st, program);
         // Declaration order decides stacking among equal layers.
         for (i, w) in program.windows.iter().enumerate() {
             if let Some(g) = st.windows.get(&w.name) {

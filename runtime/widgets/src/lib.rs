@@ -7,6 +7,7 @@
 pub mod component;
 pub mod draw;
 pub mod map;
+pub mod menu;
 pub mod renderer;
 
 pub use component::Library;

@@ -1,9 +1,16 @@
 //! The map module: claims windows of subtype `map` and draws every vehicle under
 //! `root.vehicles` (a symbol pointing along its heading, its name) and its routes with
 //! their waypoints, in local metres, scaled to fit. No tiles.
+//!
+//! Pointer (routed by the window manager through transparent layers above): a left press
+//! on a vehicle symbol selects it (`root.operator.selected`); elsewhere it raises the
+//! `select` event of the `Map` widget placed in the window (fig. 1: the small map swaps
+//! into the large place). A right press on a symbol opens the layout's context menu for
+//! the vehicle's type. `symbols()` answers `[name, x, y, …]` in window pixels.
 
 use mocu_dataserver::{
-    DataServer, DottedPath, Executor, Kind, Notification, PathWatch, Subject, SubscriptionId, Topic,
+    CallOutcome, DataServer, DottedPath, Executor, Kind, MethodSpec, Notification, ParamSpec,
+    PathWatch, Subject, SubscriptionId, Topic, ValueKind,
 };
 use mocu_display::{
     Align, Baseline, Brush, Canvas, Color, PaintArgs, Path, Point, Rect, Stroke, TextStyle,
@@ -30,6 +37,8 @@ struct State {
     vehicles_watch: Option<PathWatch>,
     vehicles_sub: Option<SubscriptionId>,
     maps: Vec<Guid>,
+    /// Where each map window last drew each vehicle (window-local px).
+    symbols: HashMap<Guid, Vec<(Guid, String, Point)>>,
     per_vehicle: HashMap<Guid, Vec<PathWatch>>,
 }
 
@@ -81,7 +90,9 @@ impl Drop for MapModule {
             self.shared.ds.unsubscribe(s);
         }
         for m in maps {
-            let _ = self.shared.ds.unpublish_method(m, "paint");
+            for name in ["paint", "pointer", "symbols"] {
+                let _ = self.shared.ds.unpublish_method(m, name);
+            }
         }
     }
 }
@@ -94,14 +105,19 @@ impl Shared {
                 let weak = Arc::downgrade(self);
                 let ok = claim_window(&self.ds, g, move |c: &mut dyn Canvas, a: &PaintArgs| {
                     if let Some(sh) = weak.upgrade() {
-                        sh.paint(c, a);
+                        sh.paint(g, c, a);
                     }
                 });
                 if ok.is_ok() {
                     self.state.lock().maps.push(g);
+                    self.publish_input(g);
                 }
             }
-            Kind::Deleted => self.state.lock().maps.retain(|m| *m != g),
+            Kind::Deleted => {
+                let mut st = self.state.lock();
+                st.maps.retain(|m| *m != g);
+                st.symbols.remove(&g);
+            }
             _ => {}
         }
     }
@@ -159,7 +175,93 @@ impl Shared {
         }
     }
 
-    fn paint(&self, c: &mut dyn Canvas, _a: &PaintArgs) {
+    fn publish_input(self: &Arc<Self>, g: Guid) {
+        let weak = Arc::downgrade(self);
+        let spec = MethodSpec::new("pointer")
+            .param(ParamSpec::new("kind", ValueKind::String))
+            .param(ParamSpec::new("button", ValueKind::Int))
+            .param(ParamSpec::new("x", ValueKind::Float))
+            .param(ParamSpec::new("y", ValueKind::Float));
+        let _ = self.ds.publish_method_fn(g, spec, move |args| {
+            let Some(sh) = weak.upgrade() else {
+                return CallOutcome::Failed("map stopped".into());
+            };
+            let p = Point::new(
+                args[2].as_f64().unwrap_or(0.0) as f32,
+                args[3].as_f64().unwrap_or(0.0) as f32,
+            );
+            if args[0].as_str() == Some("down") {
+                sh.press(g, args[1].as_i64().unwrap_or(-1), p);
+            }
+            CallOutcome::Accepted(vec![])
+        });
+        let weak = Arc::downgrade(self);
+        let _ = self.ds.publish_method_fn(g, MethodSpec::new("symbols"), move |_| {
+            let Some(sh) = weak.upgrade() else {
+                return CallOutcome::Failed("map stopped".into());
+            };
+            let st = sh.state.lock();
+            let mut out = Vec::new();
+            for (_, name, p) in st.symbols.get(&g).into_iter().flatten() {
+                out.push(Value::str(name));
+                out.push(Value::Float(p.x as f64));
+                out.push(Value::Float(p.y as f64));
+            }
+            CallOutcome::Accepted(out)
+        });
+    }
+
+    /// The vehicle whose symbol is within reach of a window-local point.
+    fn vehicle_at(&self, g: Guid, p: Point) -> Option<Guid> {
+        let st = self.state.lock();
+        st.symbols
+            .get(&g)?
+            .iter()
+            .map(|(v, _, s)| (*v, (s.x - p.x).powi(2) + (s.y - p.y).powi(2)))
+            .filter(|(_, d2)| *d2 <= 16.0 * 16.0)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(v, _)| v)
+    }
+
+    fn press(&self, g: Guid, button: i64, p: Point) {
+        let ds = &self.ds;
+        let vehicle = self.vehicle_at(g, p);
+        match (button, vehicle) {
+            (1, Some(v)) => {
+                let n = |k: &str| {
+                    ds.try_get(g, PropName::new(k)).and_then(|x| x.as_f64()).unwrap_or(0.0) as f32
+                };
+                crate::menu::open(ds, v, Point::new(n("x") + p.x, n("y") + p.y));
+            }
+            (0, Some(v)) => {
+                if let Ok(Some(op)) = ds.find_child(Guid::ROOT, "operator").map(|o| {
+                    o.or_else(|| {
+                        ds.create_object(
+                            Guid::ROOT,
+                            mocu_dataserver::ObjectInfo::new("operator", "operator"),
+                        )
+                        .ok()
+                    })
+                }) {
+                    let _ = ds.set(op, "selected", Value::Guid(v));
+                    if let Ok(i) = ds.info(v) {
+                        let _ = ds.set(op, "selected_name", Value::str(&i.name));
+                    }
+                }
+                self.repaint();
+            }
+            (0, None) => {
+                for w in ds.children(g).unwrap_or_default() {
+                    if ds.methods(w).is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "select")) {
+                        ds.call(w, "select", vec![], None, |_| {});
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn paint(&self, g: Guid, c: &mut dyn Canvas, _a: &PaintArgs) {
         let size = c.size();
         let bg = Color::rgba(0x0e, 0x17, 0x22, 0xf0);
         let grid = Color::rgba(0x38, 0xbd, 0xf8, 0x22);
@@ -226,8 +328,20 @@ impl Shared {
                 }
             }
         }
+        let selected = self
+            .ds
+            .find_child(Guid::ROOT, "operator")
+            .ok()
+            .flatten()
+            .and_then(|op| self.ds.try_get(op, PropName::new("selected")))
+            .and_then(|v| v.as_guid());
+        let mut symbols = Vec::new();
         for v in &vehicles {
             let p = to_screen(v.pos.0, v.pos.1);
+            symbols.push((v.guid, v.name.clone(), p));
+            if selected == Some(v.guid) {
+                c.stroke_circle(p, 16.0, 1.5, Color::rgb(0xfa, 0xcc, 0x15));
+            }
             let h = (v.heading as f32).to_radians();
             // Heading 0 = north (up), clockwise.
             let dir = |a: f32, r: f32| Point::new(p.x + (h + a).sin() * r, p.y - (h + a).cos() * r);
@@ -241,6 +355,7 @@ impl Shared {
                 .baseline(Baseline::Middle);
             c.draw_text(&v.name, Point::new(p.x + 14.0, p.y), &style);
         }
+        self.state.lock().symbols.insert(g, symbols);
         c.stroke_rounded_rect(
             Rect::new(0.5, 0.5, size.w - 1.0, size.h - 1.0),
             6.0,
@@ -290,6 +405,7 @@ impl Shared {
                 }
             }
             out.push(MapVehicle {
+                guid: v,
                 name,
                 pos,
                 heading: get(nav, "heading").unwrap_or(0.0),
@@ -302,6 +418,7 @@ impl Shared {
 }
 
 struct MapVehicle {
+    guid: Guid,
     name: String,
     pos: (f64, f64),
     heading: f64,

@@ -435,6 +435,14 @@ impl Shared {
     }
 
     fn pointer(self: &Arc<Self>, window: Guid, kind: &str, button: i64, p: Point) {
+        if self.ds.info(window).is_ok_and(|i| &*i.name == crate::menu::WINDOW) {
+            self.menu_pointer(window, kind, button, p);
+            return;
+        }
+        if (kind, button) == ("down", 1) {
+            self.context_menu(window, p);
+            return;
+        }
         let under = self.widget_at(window, p);
         let mut changed = Vec::new();
         let press_target = {
@@ -471,6 +479,70 @@ impl Shared {
         {
             self.ds.call(g, "press", vec![], None, |_| {});
         }
+    }
+
+    /// Pointer input on the open context menu: hover a row, press to choose, leave to close.
+    fn menu_pointer(&self, window: Guid, kind: &str, button: i64, p: Point) {
+        let Some(&m) = self.ds.children(window).ok().and_then(|c| c.first().copied()).as_ref()
+        else {
+            return;
+        };
+        let items = self.ds.try_get(m, PropName::new("items")).and_then(|v| v.as_i64());
+        let row = crate::menu::row_at(p.y, items.unwrap_or(0).max(0) as usize);
+        match (kind, button) {
+            ("leave", _) => crate::menu::close(&self.ds),
+            ("down", 0) => {
+                if let Some(i) = row {
+                    crate::menu::choose(&self.ds, m, i);
+                }
+            }
+            _ => {
+                let r = Value::Int(row.map_or(-1, |r| r as i64));
+                if self.ds.try_get(m, PropName::new("hover_row")) != Some(r.clone()) {
+                    let _ = self.ds.set(m, "hover_row", r);
+                }
+            }
+        }
+    }
+
+    /// A right-click on a widget bound to an object that has a context menu: a vehicle
+    /// list's row, or any widget with a property naming an object (`root.vehicles.usv1`).
+    fn context_menu(&self, window: Guid, p: Point) {
+        let ds = &self.ds;
+        let Ok(mut ws) = ds.children(window) else { return };
+        ws.sort_by_key(|w| {
+            ds.try_get(*w, PropName::new("order")).and_then(|v| v.as_i64()).unwrap_or(0)
+        });
+        let Some(w) =
+            ws.into_iter().rev().find(|w| widget_bounds(ds, *w).is_some_and(|b| b.contains(p)))
+        else {
+            return;
+        };
+        let b = widget_bounds(ds, w).unwrap_or_default();
+        let component = ds.try_get(w, PropName::new("component"));
+        let object = if component.as_ref().and_then(Value::as_str) == Some("VehicleList") {
+            let filter = ds.try_get(w, PropName::new("filter"));
+            let filter = filter.as_ref().and_then(Value::as_str).filter(|f| !f.is_empty());
+            let row = ((p.y - b.y - LIST_TOP) / LIST_ROW).floor();
+            (row >= 0.0)
+                .then(|| listed_vehicles(ds, filter).get(row as usize).map(|v| v.0))
+                .flatten()
+        } else {
+            ds.properties(w).ok().and_then(|props| {
+                props.into_iter().find_map(|(_, v)| {
+                    let path = v.as_str()?.strip_prefix("root.")?.to_string();
+                    let segs: Vec<&str> = path.split('.').collect();
+                    let g = ds.resolve(&segs)?;
+                    let kind = ds.info(g).ok()?.kind;
+                    ds.resolve(&["display", "menus", &kind]).map(|_| g)
+                })
+            })
+        };
+        let Some(object) = object else { return };
+        let n = |k: &str| {
+            ds.try_get(window, PropName::new(k)).and_then(|v| v.as_f64()).unwrap_or(0.0) as f32
+        };
+        crate::menu::open(ds, object, Point::new(n("x") + p.x, n("y") + p.y));
     }
 
     /// The topmost pressable widget under a window-local point.
@@ -640,6 +712,10 @@ fn draw_native(
     bounds: Option<Rect>,
 ) {
     let b = bounds.unwrap_or(Rect::new(0.0, 0.0, 160.0, 40.0));
+    if component == "ContextMenu" {
+        context_menu(c, props, b);
+        return;
+    }
     c.fill_rounded_rect(Rect::new(0.0, 0.0, b.w, b.h), 4.0, &Brush::Solid(theme::PANEL));
     c.stroke_rounded_rect(
         Rect::new(0.5, 0.5, b.w - 1.0, b.h - 1.0),
@@ -668,6 +744,7 @@ mod theme {
     pub const PANEL: Color = Color::rgba(0x10, 0x18, 0x20, 0xe0);
     pub const TRACK: Color = Color::rgb(0x26, 0x32, 0x3e);
     pub const FRAME: Color = Color::rgb(0x3a, 0x4a, 0x5a);
+    pub const ACCENT: Color = Color::rgb(0x38, 0xbd, 0xf8);
     pub const TEXT: Color = Color::rgb(0xe8, 0xf0, 0xf8);
     pub const DIM: Color = Color::rgb(0x8f, 0xa3, 0xb5);
     pub const GOOD: Color = Color::rgb(0x22, 0xc5, 0x5e);
@@ -676,28 +753,80 @@ mod theme {
     pub const NODATA: Color = Color::rgb(0x5b, 0x64, 0x70);
 }
 
-/// One row per vehicle: a link-state dot, the name, its type, link and fuel as small bars.
-fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Rect) {
-    let head = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle).bold();
-    c.draw_text("VEHICLES", Point::new(10.0, 13.0), &head);
-    c.line(Point::new(6.0, 25.0), Point::new(b.w - 6.0, 25.0), 1.0, theme::FRAME);
-    let vehicles = ds
-        .resolve(&["vehicles"])
+/// Where a vehicle list's rows start, and their height.
+const LIST_TOP: f32 = 28.0;
+const LIST_ROW: f32 = 26.0;
+
+/// The vehicles a list shows, in order.
+fn listed_vehicles(
+    ds: &DataServer,
+    filter: Option<&str>,
+) -> Vec<(Guid, mocu_dataserver::ObjectInfo)> {
+    ds.resolve(&["vehicles"])
         .and_then(|f| ds.children(f).ok())
         .unwrap_or_default()
         .into_iter()
         .filter_map(|v| ds.info(v).ok().map(|i| (v, i)))
         .filter(|(_, i)| filter.is_none_or(|f| &*i.kind == f))
-        .collect::<Vec<_>>();
+        .collect()
+}
+
+/// The context menu: a title and one row per item, the hovered row lit.
+fn context_menu(c: &mut dyn Canvas, props: &HashMap<String, Value>, b: Rect) {
+    let s = |k: &str| props.get(k).and_then(Value::as_str).unwrap_or("").to_string();
+    c.fill_rounded_rect(
+        Rect::new(0.0, 0.0, b.w, b.h),
+        5.0,
+        &Brush::Solid(Color::rgba(0x0d, 0x14, 0x1b, 0xf2)),
+    );
+    c.stroke_rounded_rect(
+        Rect::new(0.75, 0.75, b.w - 1.5, b.h - 1.5),
+        5.0,
+        &Stroke::new(1.5),
+        theme::ACCENT,
+    );
+    let head = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle).bold();
+    c.draw_text(&s("title"), Point::new(10.0, crate::menu::TITLE / 2.0), &head);
+    c.line(
+        Point::new(6.0, crate::menu::TITLE - 1.0),
+        Point::new(b.w - 6.0, crate::menu::TITLE - 1.0),
+        1.0,
+        theme::FRAME,
+    );
+    let n = props.get("items").and_then(Value::as_i64).unwrap_or(0).max(0) as usize;
+    let hover = props.get("hover_row").and_then(Value::as_i64).unwrap_or(-1);
+    for i in 0..n {
+        let y = crate::menu::TITLE + i as f32 * crate::menu::ROW;
+        let enabled = props.get(&format!("enabled{i}")) == Some(&Value::Bool(true));
+        if hover == i as i64 && enabled {
+            c.fill_rounded_rect(
+                Rect::new(3.0, y + 1.0, b.w - 6.0, crate::menu::ROW - 2.0),
+                3.0,
+                &Brush::Solid(Color::rgba(0x38, 0xbd, 0xf8, 0x40)),
+            );
+        }
+        let label = props.get(&format!("item{i}")).map(|v| v.to_string()).unwrap_or_default();
+        let st = TextStyle::new(14.0, if enabled { theme::TEXT } else { theme::NODATA })
+            .baseline(Baseline::Middle);
+        c.draw_text(&label, Point::new(14.0, y + crate::menu::ROW / 2.0), &st);
+    }
+}
+
+/// One row per vehicle: a link-state dot, the name, its type, link and fuel as small bars.
+fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Rect) {
+    let head = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle).bold();
+    c.draw_text("VEHICLES", Point::new(10.0, 13.0), &head);
+    c.line(Point::new(6.0, 25.0), Point::new(b.w - 6.0, 25.0), 1.0, theme::FRAME);
+    let vehicles = listed_vehicles(ds, filter);
     if vehicles.is_empty() {
         let st = TextStyle::new(12.0, theme::NODATA).baseline(Baseline::Middle);
         c.draw_text("— no vehicles —", Point::new(10.0, 40.0), &st);
         return;
     }
-    let row_h = 26.0;
+    let row_h = LIST_ROW;
     let bar_w = ((b.w - 150.0) / 2.0 - 8.0).clamp(24.0, 90.0);
     for (i, (v, info)) in vehicles.iter().enumerate() {
-        let y = 28.0 + i as f32 * row_h + row_h / 2.0;
+        let y = LIST_TOP + i as f32 * row_h + row_h / 2.0;
         if y + row_h / 2.0 > b.h {
             break;
         }

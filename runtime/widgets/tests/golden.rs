@@ -223,3 +223,57 @@ fn layout_fig1_swap_animation() {
     rig.display.tick_animations();
     check_golden("layout_fig1_swap_end", &rig.frame());
 }
+
+/// §5.1: a click on a transparent pixel of the HUD (a full-screen layer above the map)
+/// reaches the map below; a right-click there on a vehicle symbol opens the layout's
+/// context menu for its type, whose items run with `self` bound to that vehicle.
+#[test]
+fn click_through_the_hud_reaches_the_map_and_opens_its_context_menu() {
+    let (mut rig, sim) = paper("usv.mocu", (1920, 1080), 20.0);
+    rig.frame();
+    let map = rig.ds.resolve(&["display", "map"]).unwrap();
+    let n = |k: &str| rig.ds.try_get(map, k.into()).and_then(|v| v.as_f64()).unwrap() as f32;
+    let (mx, my) = (n("x"), n("y"));
+    // The map draws usv1 somewhere in its window; the HUD is transparent there.
+    let syms = match rig.ds.call_wait(map, "symbols", vec![], None) {
+        mocu_dataserver::CallOutcome::Accepted(v) => v,
+        other => panic!("{other:?}"),
+    };
+    let i = syms.iter().position(|v| v.as_str() == Some("usv1")).expect("usv1 on the map");
+    let (sx, sy) = (syms[i + 1].as_f64().unwrap() as f32, syms[i + 2].as_f64().unwrap() as f32);
+    let (x, y) = (mx + sx, my + sy);
+    let hud = rig.ds.resolve(&["display", "hud"]).unwrap();
+    assert_eq!(rig.display.hit_test(x, y).map(|h| h.window), Some(map), "passes the HUD");
+    // A HUD widget's pixel is the HUD's.
+    assert_eq!(rig.display.hit_test(120.0, 120.0).map(|h| h.window), Some(hud));
+    rig.display.pointer(x, y, PointerEvent::Move);
+    let hit = rig.display.pointer(x, y, PointerEvent::Down(1)).unwrap();
+    assert_eq!(hit.window, map);
+    rig.display.pointer(x, y, PointerEvent::Up(1));
+    let f = rig.frame();
+    let menu = rig.ds.resolve(&["display", "context_menu", "menu"]).expect("a context menu");
+    let item = |k: &str| rig.ds.try_get(menu, k.into());
+    assert_eq!(item("items"), Some(Value::Int(3)));
+    assert_eq!(item("item2"), Some(Value::str("Stop")));
+    // usv1 is armed (autostart): "Arm" greyed, "Disarm" enabled.
+    assert_eq!(item("enabled0"), Some(Value::Bool(false)));
+    assert_eq!(item("enabled1"), Some(Value::Bool(true)));
+    let win = rig.ds.resolve(&["display", "context_menu"]).unwrap();
+    let wn = |k: &str| rig.ds.try_get(win, k.into()).and_then(|v| v.as_f64()).unwrap() as f32;
+    let (wx, wy) = (wn("x"), wn("y"));
+    // Hover "Stop", then choose it.
+    rig.display.pointer(wx + 40.0, wy + 26.0 + 2.5 * 26.0, PointerEvent::Move);
+    let f2 = rig.frame();
+    let crop_at =
+        |f: &tiny_skia::Pixmap| crop(f, (wx as u32).saturating_sub(200), wy as u32 - 40, 400, 160);
+    check_golden("context_menu", &crop_at(&f2));
+    drop(f);
+    rig.display.pointer(wx + 40.0, wy + 26.0 + 2.5 * 26.0, PointerEvent::Down(0));
+    rig.display.pointer(wx + 40.0, wy + 26.0 + 2.5 * 26.0, PointerEvent::Up(0));
+    rig.frame();
+    sim.step(0.05);
+    rig.ds.quiesce();
+    assert!(rig.ds.resolve(&["display", "context_menu"]).is_none(), "closed after choosing");
+    let nav = rig.ds.resolve(&["vehicles", "usv1", "nav"]).unwrap();
+    assert_eq!(rig.ds.get(nav, "goal_throttle").unwrap(), Value::Float(0.0), "usv1 stopped");
+}
