@@ -107,6 +107,8 @@ fn a_stalled_stream_is_marked_stale_then_no_video() {
         d.frame();
         windows.shown(w).map(|s| s.status)
     };
+    let end = Instant::now() + Duration::from_secs(5);
+    while status(&mut d).is_none() && Instant::now() < end {}
     assert_eq!(status(&mut d), Some(Status::NoVideo), "no stream yet");
     let ff = Ffmpeg::stream(Kind::RtpJpeg, 320, 240, port, 10);
     let end = Instant::now() + Duration::from_secs(15);

@@ -109,7 +109,20 @@ pub fn decode_jpeg(data: &[u8]) -> Result<DecodedFrame, String> {
 }
 
 /// How many encoded units may wait for the decoder before the oldest is dropped.
-pub const ENCODED_QUEUE: usize = 8;
+/// Small: a decoder that falls behind should skip ahead, not build up latency (at 30 fps
+/// four units are 133 ms).
+pub const ENCODED_QUEUE: usize = 4;
+
+/// After a lost H.264 unit, non-key units are skipped until a key unit (IDR or parameter
+/// sets) comes, or this many units have passed (streams with intra refresh have no IDR).
+pub const SKIP_AFTER_LOSS: u32 = 60;
+
+/// Whether an H.264 access unit (Annex B) holds an IDR slice or a sequence parameter set.
+pub fn is_key_unit(annexb: &[u8]) -> bool {
+    crate::rtp::annexb_nals(annexb)
+        .iter()
+        .any(|n| n.first().is_some_and(|h| matches!(h & 0x1f, 5 | 7)))
+}
 
 /// A decoder attached to one camera; detaches when dropped.
 pub struct DecoderHandle {
@@ -134,6 +147,10 @@ struct DecodeState {
     meter: Meter,
     last_latency_ms: f64,
     last_frame_us: i64,
+    last_unit: Option<i64>,
+    /// Units still to skip while waiting for a key unit after a loss (H.264).
+    skipping: u32,
+    skipped: i64,
 }
 
 /// Frames per second over windows of about 250 ms, and when to publish statistics.
@@ -191,6 +208,9 @@ pub fn attach_decoder(
         meter: Meter::default(),
         last_latency_ms: 0.0,
         last_frame_us: 0,
+        last_unit: None,
+        skipping: 0,
+        skipped: 0,
     }));
     let spec = MethodSpec::new("unit")
         .param(ParamSpec::new("data", ValueKind::Bytes))
@@ -230,6 +250,24 @@ fn on_unit(
         st.decoder = Decoder::new();
         let _ = ds.set(camera, "codec", Value::str(codec.name()));
     }
+    // A gap in unit numbers: units were dropped before the decoder (it fell behind). An
+    // H.264 decoder then waits for a key unit rather than decode from missing references.
+    let gap = st.last_unit.is_some_and(|l| u.unit != l + 1);
+    st.last_unit = Some(u.unit);
+    if codec == Codec::H264 {
+        if gap {
+            st.skipping = SKIP_AFTER_LOSS;
+        }
+        if st.skipping > 0 {
+            if is_key_unit(&u.data) {
+                st.skipping = 0;
+            } else {
+                st.skipping -= 1;
+                st.skipped += 1;
+                return;
+            }
+        }
+    }
     let mut shown = 0;
     match st.decoder.decode(codec, &u.data) {
         Ok(Some(f)) => {
@@ -254,7 +292,12 @@ fn on_unit(
             }
         }
         Ok(None) => {}
-        Err(_) => st.errors += 1,
+        Err(_) => {
+            st.errors += 1;
+            if codec == Codec::H264 {
+                st.skipping = SKIP_AFTER_LOSS;
+            }
+        }
     }
     let first = st.frames == 1 && shown == 1;
     if st.meter.tick(shown) || first {
@@ -267,7 +310,7 @@ fn on_unit(
         for (k, v) in [
             ("frames", Value::Int(st.frames)),
             ("fps", Value::Float((st.meter.fps * 10.0).round() / 10.0)),
-            ("dropped", Value::Int(queue_dropped + network + st.errors)),
+            ("dropped", Value::Int(queue_dropped + network + st.errors + st.skipped)),
             ("decode_errors", Value::Int(st.errors)),
             ("latency_ms", Value::Float((st.last_latency_ms * 10.0).round() / 10.0)),
             ("last_frame_us", Value::Int(st.last_frame_us)),
