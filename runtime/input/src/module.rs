@@ -377,12 +377,10 @@ impl Shared {
                     &sh.ctx.executor,
                     Topic::children(ev.object),
                     move |n: &Notification| {
-                        if let (Some(sh), Subject::Child { guid, name, .. }) =
-                            (weak.upgrade(), &n.subject)
+                        if let (Some(sh), Subject::Child { guid, name, .. }, Kind::New) =
+                            (weak.upgrade(), &n.subject, n.kind)
                         {
-                            if n.kind == Kind::New {
-                                sh.select_if_none(*guid, name);
-                            }
+                            sh.select_if_none(*guid, name);
                         }
                     },
                 );
