@@ -81,6 +81,9 @@ pub(crate) struct Shared {
 
 #[derive(Default)]
 struct Inbox {
+    /// The latest value of each path that changed since the last tick: a path that
+    /// changes a thousand times between two ticks costs one entry.
+    values: HashMap<usize, Option<Value>>,
     events: Vec<InboxEvent>,
     tick_scheduled: bool,
 }
@@ -637,7 +640,12 @@ impl Shared {
 
     fn post(self: &Arc<Self>, e: InboxEvent) {
         let mut inbox = self.inbox.lock();
-        inbox.events.push(e);
+        match e {
+            InboxEvent::Node(n, v) => {
+                inbox.values.insert(n, v);
+            }
+            other => inbox.events.push(other),
+        }
         if !inbox.tick_scheduled {
             inbox.tick_scheduled = true;
             let weak = self.weak();
@@ -709,26 +717,27 @@ impl Shared {
 
     /// Applies what the watches reported, then evaluates the dirty cells.
     pub(crate) fn tick(self: &Arc<Self>) {
-        let events = {
+        let (values, events) = {
             let mut inbox = self.inbox.lock();
             inbox.tick_scheduled = false;
-            std::mem::take(&mut inbox.events)
+            (std::mem::take(&mut inbox.values), std::mem::take(&mut inbox.events))
         };
         let mut st = self.state.lock();
         if st.closed {
             return;
         }
+        for (n, v) in values {
+            if n < st.nodes.len() && st.nodes[n].watch.is_some() {
+                st.nodes[n].value = v;
+                for i in 0..st.nodes[n].deps.len() {
+                    let d = st.nodes[n].deps[i];
+                    mark(&mut st, d);
+                }
+            }
+        }
         for e in events {
             match e {
-                InboxEvent::Node(n, v) => {
-                    if n < st.nodes.len() && st.nodes[n].watch.is_some() {
-                        st.nodes[n].value = v;
-                        let deps = st.nodes[n].deps.clone();
-                        for d in deps {
-                            mark(&mut st, d);
-                        }
-                    }
-                }
+                InboxEvent::Node(..) => {}
                 InboxEvent::TemplateSource(t, _) | InboxEvent::TemplateChild(t, ..)
                     if !st.templates[t].alive => {}
                 InboxEvent::TemplateSource(t, obj) => self.template_source(&mut st, t, obj),
