@@ -57,6 +57,33 @@ fn scale(x: u64, m: u64) -> u64 {
 /// `dst = src * opacity + dst * (1 - src.a * opacity)` over one row of premultiplied
 /// pixels. Fast paths: transparent source pixels are skipped, opaque ones copied.
 pub(crate) fn blend_row(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
+    // Layers are mostly fully transparent (a HUD) or fully opaque (a chart, video): whole
+    // runs of 8 pixels are skipped, or copied when the layer is opaque too, without
+    // per-pixel arithmetic.
+    let n = dst.len().min(src.len());
+    let (dst, src) = (&mut dst[..n], &src[..n]);
+    let mut d8 = dst.chunks_exact_mut(8);
+    let mut s8 = src.chunks_exact(8);
+    for (d, s) in (&mut d8).zip(&mut s8) {
+        let (mut any, mut all) = (0u8, 255u8);
+        for p in s {
+            any |= p[3];
+            all &= p[3];
+        }
+        if any == 0 {
+            continue;
+        }
+        if all == 255 && opacity == 255 {
+            d.copy_from_slice(s);
+            continue;
+        }
+        blend_pixels(d, s, opacity);
+    }
+    blend_pixels(d8.into_remainder(), s8.remainder(), opacity);
+}
+
+/// Source-over pixel by pixel, with a layer opacity.
+fn blend_pixels(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
     let o = opacity as u64;
     for (d, s) in dst.iter_mut().zip(src) {
         let sp = u32::from_le_bytes(*s);
@@ -78,6 +105,24 @@ pub(crate) fn blend_row(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
 }
 
 /// The CPU compositor: owns the frame.
+/// Source-over of one premultiplied colour onto a run of pixels (a shape's solid
+/// interior): a fill when opaque, else the lane arithmetic of [`blend_row`].
+pub(crate) fn blend_span(dst: &mut [[u8; 4]], src: [u8; 4]) {
+    if src[3] == 255 {
+        dst.fill(src);
+        return;
+    }
+    if src == [0; 4] {
+        return;
+    }
+    let sx = expand(u32::from_le_bytes(src));
+    let inv = 255 - src[3] as u64;
+    for d in dst {
+        let dx = scale(expand(u32::from_le_bytes(*d)), inv);
+        *d = collapse(sx + dx).to_le_bytes();
+    }
+}
+
 pub struct CpuCompositor {
     frame: Pixmap,
     background: [u8; 4],

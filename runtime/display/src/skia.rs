@@ -365,14 +365,26 @@ impl SkiaCanvas {
                     x = next.max(x + 1);
                     continue;
                 }
-                let k = if adx <= h_solid && adx >= h_inner {
-                    255
-                } else {
+                let solid_at = |x: i32| {
+                    let adx = (x as f32 + 0.5 - c.x).abs();
+                    adx <= h_solid && adx >= h_inner
+                };
+                if solid_at(x) {
+                    // A run of fully covered pixels at once.
+                    let mut e = x + 1;
+                    while e < x1 && solid_at(e) {
+                        e += 1;
+                    }
+                    crate::compose::blend_span(&mut row[x as usize..e as usize], solid);
+                    x = e;
+                    continue;
+                }
+                let k = {
                     let d = (dx * dx + dy2).sqrt();
                     let v = cov(ro, d) - if ri > 0.0 { cov(ri, d) } else { 0.0 };
                     (v * 255.0 + 0.5) as u32
                 };
-                if k == 255 {
+                if k >= 255 {
                     crate::compose::over_px(&mut row[x as usize], solid);
                 } else if k > 0 {
                     let src =
@@ -479,7 +491,7 @@ impl SkiaCanvas {
             let mut x = x0;
             while x < x1 {
                 let dx = x as f32 + 0.5 - c.x;
-                if dx.abs() < hollow && !round {
+                if dx.abs() < hollow {
                     x = ((c.x + hollow - 0.5).floor() as i32 + 1).max(x + 1);
                     continue;
                 }
@@ -495,10 +507,13 @@ impl SkiaCanvas {
                     let ang = if small { e0.min(e1) } else { e0.max(e1) };
                     k = radial * ang;
                 }
-                if round {
+                if round && k < 1.0 {
+                    let reach = (hw + 0.5) * (hw + 0.5);
                     for (cx, cy) in caps {
-                        let dd = ((x as f32 + 0.5 - cx).powi(2) + (dy + c.y - cy).powi(2)).sqrt();
-                        k = k.max(cov(hw, dd));
+                        let d2 = (x as f32 + 0.5 - cx).powi(2) + (dy + c.y - cy).powi(2);
+                        if d2 < reach {
+                            k = k.max(cov(hw, d2.sqrt()));
+                        }
                     }
                 }
                 if k > 0.0 {

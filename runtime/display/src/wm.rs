@@ -530,7 +530,7 @@ impl WindowManager {
                 };
                 let pm = match layer.pixmap.take() {
                     Some(mut pm) if pm.width() == pw && pm.height() == ph => {
-                        pm.fill(tiny_skia::Color::TRANSPARENT);
+                        pm.data_mut().fill(0); // a memset; tiny-skia's fill goes pixel by pixel
                         pm
                     }
                     _ => match Pixmap::new(pw, ph) {
