@@ -534,7 +534,7 @@ impl SkiaCanvas {
             return None;
         }
         let els = path.elements();
-        if els.is_empty() || els.len() % 2 != 0 || els.len() > 512 {
+        if els.is_empty() || !els.len().is_multiple_of(2) || els.len() > 512 {
             return None;
         }
         let mut segs = Vec::with_capacity(els.len() / 2);

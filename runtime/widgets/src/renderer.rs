@@ -273,18 +273,15 @@ impl Shared {
         if data {
             self.arm_stale_timer(w, self.config.stale_after);
         }
-        match name.as_str() {
-            "feedback" => {
-                let after = self.config.accepted_for.max(self.config.refused_for)
-                    + Duration::from_millis(20);
-                let weak = Arc::downgrade(self);
-                self.ds.run_after(after, Some(&self.exec), move || {
-                    if let Some(sh) = weak.upgrade() {
-                        sh.damage(window, widget_bounds(&sh.ds, w));
-                    }
-                });
-            }
-            _ => {}
+        if name.as_str() == "feedback" {
+            let after =
+                self.config.accepted_for.max(self.config.refused_for) + Duration::from_millis(20);
+            let weak = Arc::downgrade(self);
+            self.ds.run_after(after, Some(&self.exec), move || {
+                if let Some(sh) = weak.upgrade() {
+                    sh.damage(window, widget_bounds(&sh.ds, w));
+                }
+            });
         }
     }
 
