@@ -122,6 +122,10 @@ fn a_stalled_stream_is_marked_stale_then_no_video() {
             && seen.last() != Some(&s)
         {
             seen.push(s);
+            if let Some(dir) = std::env::var_os("MOCU_VIDEO_DUMP") {
+                let _ =
+                    d.read_frame().save_png(std::path::Path::new(&dir).join(format!("{s:?}.png")));
+            }
         }
     }
     assert_eq!(seen, vec![Status::Live, Status::Stale, Status::NoVideo]);
