@@ -314,13 +314,22 @@ pub fn main(args: RunArgs) -> ExitCode {
         };
         let ev = events.clone();
         let s2 = sink.clone();
-        match run_window(&ds, opts, move |_d| drain_events(&ev, &s2)) {
-            Ok(c) => {
+        // A graphics stack can fail in ways wgpu reports by panicking (a surface the
+        // adapter cannot present to, seen with lavapipe under Xvfb): the operator gets the
+        // CPU path, not a crash.
+        let attempt = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            run_window(&ds, opts, move |_d| drain_events(&ev, &s2))
+        }));
+        match attempt {
+            Ok(Ok(c)) => {
                 ran_window = true;
                 eprintln!("mocu: window closed after {} frames drawn", c.frames_drawn);
             }
-            Err(e) => eprintln!(
+            Ok(Err(e)) => eprintln!(
                 "mocu: no window ({e}); falling back to headless frames on the CPU (tiny-skia)"
+            ),
+            Err(_) => eprintln!(
+                "mocu: the window's graphics failed (try WGPU_BACKEND=gl); falling back to headless frames on the CPU (tiny-skia)"
             ),
         }
     }
