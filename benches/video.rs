@@ -280,8 +280,31 @@ fn latency_table(filter: Option<&str>) {
 
 /// The first free argument (criterion's filter), skipping option values.
 fn filter() -> Option<String> {
+    const TAKES_VALUE: &[&str] = &[
+        "--warm-up-time",
+        "--measurement-time",
+        "--sample-size",
+        "--save-baseline",
+        "--baseline",
+        "--baseline-lenient",
+        "--load-baseline",
+        "--profile-time",
+        "--noise-threshold",
+        "--confidence-level",
+        "--significance-level",
+        "--nresamples",
+        "--output-format",
+        "--color",
+        "--format",
+        "--logfile",
+    ];
     let args: Vec<String> = std::env::args().skip(1).collect();
-    args.iter().find(|a| !a.starts_with('-')).cloned()
+    args.iter()
+        .enumerate()
+        .find(|(i, a)| {
+            !a.starts_with('-') && (*i == 0 || !TAKES_VALUE.contains(&args[i - 1].as_str()))
+        })
+        .map(|(_, a)| a.clone())
 }
 
 fn main() {
