@@ -22,7 +22,11 @@ fn layout_text(colour: &str, widgets: usize) -> String {
     );
     s.push_str(&format!("  a: Box {{ at 10 60 100 40  c {colour} }}\n"));
     for i in 0..widgets {
-        s.push_str(&format!("  w{i}: Box {{ at {} {} 8 8  c #202020 }}\n", 120 + (i % 40) * 10, 60 + (i / 40) * 10));
+        s.push_str(&format!(
+            "  w{i}: Box {{ at {} {} 8 8  c #202020 }}\n",
+            120 + (i % 40) * 10,
+            60 + (i / 40) * 10
+        ));
     }
     s.push_str("}\n");
     s
@@ -38,11 +42,16 @@ fn write_to_frame(rounds: usize) {
     let path = dir.path().join("hud.mocu");
     std::fs::write(&path, layout_text("#ff0000", 20)).unwrap();
     let ds = DataServer::default();
-    let mut display = Display::new(&ds, DisplayOptions::new(640, 360).backend(BackendChoice::Cpu)).unwrap();
+    let mut display =
+        Display::new(&ds, DisplayOptions::new(640, 360).backend(BackendChoice::Cpu)).unwrap();
     let (bundle, _) = mocu_language::load_target(&path).unwrap();
     let renderer = Arc::new(
-        WidgetRenderer::start(&ds, Library::compile(&bundle.layouts[0].program, true).unwrap(), RendererConfig::default())
-            .unwrap(),
+        WidgetRenderer::start(
+            &ds,
+            Library::compile(&bundle.layouts[0].program, true).unwrap(),
+            RendererConfig::default(),
+        )
+        .unwrap(),
     );
     let r2 = renderer.clone();
     let options = ReloaderOptions {
