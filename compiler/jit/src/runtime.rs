@@ -97,7 +97,9 @@ impl EvalCtx {
     }
 
     pub(crate) fn fmt_text(&mut self, h: u64) {
-        self.buf.push_str(&self.strings[h as usize]);
+        if let Some(s) = self.strings.get(h as usize) {
+            self.buf.push_str(s);
+        }
     }
 
     pub(crate) fn fmt_num(&mut self, x: f64, spec: NumFormat) {
@@ -171,7 +173,13 @@ pub(crate) unsafe extern "C" fn str_eq(ctx: *mut EvalCtx, a: u64, b: u64) -> u8 
     // SAFETY: compiled code passes through the ctx pointer its caller gave it, which
     // `Unit::call` takes as `&mut EvalCtx` for the duration of the call.
     let ctx = unsafe { &*ctx };
-    (ctx.string(a) == ctx.string(b)) as u8
+    // Compiled code compares branch-free, so an absent operand's (meaningless) handle may
+    // arrive here: it must not panic (a panic cannot unwind out of compiled code). The
+    // result is then ignored, its presence flag being false.
+    match (ctx.strings.get(a as usize), ctx.strings.get(b as usize)) {
+        (Some(x), Some(y)) => (x == y) as u8,
+        _ => 0,
+    }
 }
 
 /// # Safety

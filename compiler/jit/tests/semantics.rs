@@ -158,3 +158,11 @@ fn ill_typed_ir_is_refused_before_code_generation() {
     assert!(matches!(compile(&[bad.clone()]), Err(JitError::Ir(_))));
     assert!(Interpreter::new(&[bad]).is_err());
 }
+
+#[test]
+fn comparing_absent_strings_is_absent_even_with_no_string_in_the_context() {
+    // Regression: the compiled comparison ran the string helper on an absent operand's
+    // meaningless handle, which indexed an empty string table and aborted.
+    let e = Expr::Cmp(Cmp::Eq, b(input(0, Ty::Str)), b(input(1, Ty::Str)));
+    assert_eq!(eval(e, &[(Ty::Str, Slot::ABSENT), (Ty::Str, Slot::ABSENT)]), Out::Absent);
+}
