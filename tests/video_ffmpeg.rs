@@ -82,6 +82,15 @@ fn one_ffmpeg_stream_shows_in_two_windows() {
     // Statistics for HUD overlays.
     let fps = ds.get(cam, "fps").unwrap().as_f64().unwrap();
     assert!(fps > 0.0, "fps {fps}");
+    // The shown latency is published with the statistics after frames were shown: give it
+    // a few frames (bounded) rather than racing the first ones.
+    let end = Instant::now() + Duration::from_secs(10);
+    while !ds.get(cam, "shown_latency_ms").is_ok_and(|v| v.as_f64().is_some())
+        && Instant::now() < end
+    {
+        d.wait_for_change(Duration::from_millis(50));
+        d.frame();
+    }
     assert!(ds.get(cam, "shown_latency_ms").is_ok_and(|v| v.as_f64().is_some()));
     drop(windows);
     rx.stop();
