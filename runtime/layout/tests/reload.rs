@@ -120,13 +120,13 @@ fn a_watch_that_did_not_change_keeps_its_hold_timer() {
     let v = ds.create_object(Guid::ROOT, ObjectInfo::new("v", "usv")).unwrap();
     ds.set(v, "speed", Value::Float(5.0)).unwrap();
     let sink = Arc::new(MemorySink::default());
-    let text = "watch slow { when root.v.speed < 1 for 300ms then alert warning \"slow\" }\nwindow w { layer 1 rect 0 0 10 10 }";
+    let text = "watch slow { when root.v.speed < 1 for 600ms then alert warning \"slow\" }\nwindow w { layer 1 rect 0 0 10 10 }";
     let layout = Layout::load(&ds, &program(text), config(), sink.clone()).unwrap();
     ds.set(v, "speed", Value::Float(0.5)).unwrap();
     layout.settle();
     let watch = find(&ds, &["operator", "watches", "slow"]);
     assert_eq!(ds.get(watch, "state").unwrap(), Value::str("holding"));
-    std::thread::sleep(Duration::from_millis(150));
+    std::thread::sleep(Duration::from_millis(400));
     layout.reload(&program(&text.replace("rect 0 0 10 10", "rect 0 0 20 20"))).unwrap();
     assert_eq!(find(&ds, &["operator", "watches", "slow"]), watch, "the watch was kept");
     let t0 = std::time::Instant::now();
