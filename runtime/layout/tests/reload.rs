@@ -134,8 +134,9 @@ fn a_watch_that_did_not_change_keeps_its_hold_timer() {
         assert!(t0.elapsed() < Duration::from_secs(5));
         std::thread::sleep(Duration::from_millis(5));
     }
+    // The original timer has about 200 ms left; a restarted one would need 600 ms.
     assert!(
-        t0.elapsed() < Duration::from_millis(290),
+        t0.elapsed() < Duration::from_millis(450),
         "fired on the original timer, not a restarted one"
     );
 }
