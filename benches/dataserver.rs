@@ -20,6 +20,8 @@
 //! `scale`, `percentiles` and `summary` sections. Under `cargo test --benches` (no `--bench`
 //! flag) everything runs once, at a small size.
 
+mod common;
+use common::filter;
 use criterion::{Criterion, criterion_group};
 use crossbeam_channel::{Receiver, Sender};
 use mocu_dataserver::{Config, DataServer, Guid, Kind, ObjectInfo, PropName, Topic, Value};
@@ -719,36 +721,6 @@ impl Row {
     fn new(name: &'static str, ours: f64, base: f64, target: Option<f64>) -> Row {
         Row { name, ours, base, target }
     }
-}
-
-/// The FILTER criterion was given, if any (the first positional argument).
-fn filter() -> Option<String> {
-    const TAKES_VALUE: &[&str] = &[
-        "--save-baseline",
-        "--baseline",
-        "--baseline-lenient",
-        "--load-baseline",
-        "--sample-size",
-        "--warm-up-time",
-        "--measurement-time",
-        "--nresamples",
-        "--noise-threshold",
-        "--confidence-level",
-        "--significance-level",
-        "--profile-time",
-        "--plotting-backend",
-        "--output-format",
-        "--color",
-        "--format",
-        "--logfile",
-    ];
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    args.iter()
-        .enumerate()
-        .find(|(i, a)| {
-            !a.starts_with('-') && (*i == 0 || !TAKES_VALUE.contains(&args[i - 1].as_str()))
-        })
-        .map(|(_, a)| a.clone())
 }
 
 fn main() {

@@ -26,6 +26,8 @@
 //! also selects among the `compile_1000_gauges`, `latency` and `throughput` sections. Under
 //! `cargo test --benches` every size shrinks to a smoke run.
 
+mod common;
+use common::filter;
 use criterion::{Criterion, criterion_group};
 use crossbeam_channel::Receiver;
 use mocu_dataserver::{DataServer, Guid, Kind, ObjectInfo, PropName, Topic, Value};
@@ -551,36 +553,6 @@ fn print_table(rows: &[Row]) {
         );
     }
     eprintln!();
-}
-
-/// The FILTER argument (the first free argument), which also selects summary sections.
-fn filter() -> Option<String> {
-    const TAKES_VALUE: &[&str] = &[
-        "--save-baseline",
-        "--baseline",
-        "--baseline-lenient",
-        "--load-baseline",
-        "--sample-size",
-        "--warm-up-time",
-        "--measurement-time",
-        "--nresamples",
-        "--noise-threshold",
-        "--confidence-level",
-        "--significance-level",
-        "--profile-time",
-        "--output-format",
-        "--color",
-        "--plotting-backend",
-    ];
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        if TAKES_VALUE.contains(&a.as_str()) {
-            args.next();
-        } else if !a.starts_with('-') {
-            return Some(a);
-        }
-    }
-    None
 }
 
 fn main() {

@@ -17,6 +17,8 @@
 #[path = "../runtime/video/tests/peer/mod.rs"]
 mod peer;
 
+mod common;
+use common::filter;
 use criterion::{BenchmarkId, Criterion};
 use mocu_dataserver::{Call, DataServer, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Value};
 use mocu_display::{BackendChoice, Display, DisplayOptions, Rect};
@@ -276,35 +278,6 @@ fn latency_table(filter: Option<&str>) {
             pct(&l, 1.0)
         );
     }
-}
-
-/// The first free argument (criterion's filter), skipping option values.
-fn filter() -> Option<String> {
-    const TAKES_VALUE: &[&str] = &[
-        "--warm-up-time",
-        "--measurement-time",
-        "--sample-size",
-        "--save-baseline",
-        "--baseline",
-        "--baseline-lenient",
-        "--load-baseline",
-        "--profile-time",
-        "--noise-threshold",
-        "--confidence-level",
-        "--significance-level",
-        "--nresamples",
-        "--output-format",
-        "--color",
-        "--format",
-        "--logfile",
-    ];
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    args.iter()
-        .enumerate()
-        .find(|(i, a)| {
-            !a.starts_with('-') && (*i == 0 || !TAKES_VALUE.contains(&args[i - 1].as_str()))
-        })
-        .map(|(_, a)| a.clone())
 }
 
 fn main() {
