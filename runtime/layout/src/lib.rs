@@ -1,6 +1,7 @@
 //! Live layouts: a checked [`Program`](mocu_language::Program) bound to the DataServer.
 //!
-//! - [`lower`]: typed expressions → the JIT's IR; each dotted path becomes an input slot.
+//! - [`lower`] (the `mocu-lower` crate, shared with the widget renderer): typed expressions
+//!   → the JIT's IR; each dotted path becomes an input slot.
 //! - [`graph`]: functions compiled together (Cranelift), cells binding them to shared path
 //!   subscriptions, evaluated once per tick with early cutoff; outputs under `root.display`.
 //! - `watch`: watches on delayed calls (hold, hysteresis, repeat, snooze).
@@ -12,10 +13,10 @@
 //! bindings as methods, watches, feedback and alerts under `root.operator`.
 
 mod actions;
-mod convert;
 pub mod events;
 pub mod graph;
-pub mod lower;
+pub use mocu_lower as lower;
+use mocu_lower::convert;
 mod menu;
 mod reload;
 mod watch;

@@ -4,7 +4,8 @@
 use mocu_jit::{self as jit, Evaluate, Slot};
 use mocu_language::program::{Component, Program};
 use mocu_language::types::TypeKind;
-use mocu_layout::lower::{LowerError, Lowerer, Scope, Source, value_ty};
+use mocu_lower::convert::{to_slot, to_value};
+use mocu_lower::{LowerError, Lowerer, Scope, Source, value_ty};
 use mocu_value::Value;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -70,32 +71,7 @@ impl Library {
         let types = self.eval.output_types(c.func);
         let mut outs = vec![Slot::ABSENT; types.len()];
         self.eval.call(c.func, &slots, &mut outs, &mut ctx);
-        outs.iter()
-            .zip(types)
-            .map(|(s, t)| match s.decode(*t, &ctx) {
-                jit::Out::Num(x) => Some(Value::Float(x)),
-                jit::Out::Bool(b) => Some(Value::Bool(b)),
-                jit::Out::Str(s) => Some(Value::Str(s)),
-                jit::Out::Color(c) => Some(Value::Int(c as i64)),
-                jit::Out::Absent => None,
-            })
-            .collect()
-    }
-}
-
-fn to_slot(v: Option<&Value>, ty: jit::Ty, ctx: &mut jit::EvalCtx) -> Slot {
-    let Some(v) = v else { return Slot::ABSENT };
-    match ty {
-        jit::Ty::Num => v.as_f64().map_or(Slot::ABSENT, Slot::num),
-        jit::Ty::Bool => v.as_bool().map_or(Slot::ABSENT, Slot::bool),
-        jit::Ty::Str => match v {
-            Value::Str(s) => Slot::str(ctx, s.clone()),
-            Value::Float(_) | Value::Int(_) | Value::Bool(_) => {
-                Slot::str(ctx, v.to_string().into())
-            }
-            _ => Slot::ABSENT,
-        },
-        jit::Ty::Color => v.as_i64().map_or(Slot::ABSENT, |c| Slot::color(c as u32)),
+        outs.iter().zip(types).map(|(s, t)| to_value(s.decode(*t, &ctx))).collect()
     }
 }
 

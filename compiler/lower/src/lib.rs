@@ -1,8 +1,18 @@
 //! Lowering: the checked program's typed expressions to the JIT's IR. Every path becomes an
 //! input slot; the list of slots is the expression's subscription set.
+//!
+//! Shared by the live layout (`mocu-layout`) and the widget renderer (`mocu-widgets`, which
+//! compiles component bodies), so that neither reaches into the other. [`convert`] turns
+//! world-model values into input slots and results back into values, the one rule both use.
+//!
+//! Architecture invariant: compiler side: knows nothing of the DataServer, threads or I/O.
+
+#![forbid(unsafe_code)]
+
+pub mod convert;
 
 use mocu_jit as jit;
-use mocu_language::program::{Arg, Expr, FormatPart, Node, Path, PathBase};
+use mocu_language::program::{Arg, Expr, FormatPart, FormatSpec, Node, Path, PathBase};
 use mocu_language::types::{Type, TypeKind};
 use std::sync::Arc;
 
@@ -173,12 +183,7 @@ impl<'a> Lowerer<'a> {
                     pieces.push(match p {
                         FormatPart::Text(t) => jit::Piece::Text(Arc::from(t.as_str())),
                         FormatPart::Value { expr, spec } => {
-                            let spec = spec.as_ref().map(|s| jit::NumFormat {
-                                zero: s.zero,
-                                width: s.width.map(|w| w.min(64) as u8),
-                                precision: s.precision.map(|p| p.min(17) as u8),
-                            });
-                            self.piece(expr, spec)?
+                            self.piece(expr, spec.as_ref().map(num_format))?
                         }
                     });
                 }
@@ -283,7 +288,7 @@ impl<'a> Lowerer<'a> {
             "format" => {
                 let a = args.first().ok_or_else(|| LowerError("format() needs a value".into()))?;
                 let spec = match args.get(1).map(|s| &s.node) {
-                    Some(Node::Str(s)) => Some(parse_spec(s)),
+                    Some(Node::Str(s)) => parse_spec(s).as_ref().map(num_format),
                     _ => None,
                 };
                 Ok(jit::Expr::Format(vec![self.piece(a, spec)?]))
@@ -334,16 +339,23 @@ impl<'a> Lowerer<'a> {
     }
 }
 
-/// `.1`, `03.0`, `5` → a number format.
-pub fn parse_spec(s: &str) -> jit::NumFormat {
-    let s = s.trim_start_matches(':');
-    let (w, p) = match s.split_once('.') {
-        Some((w, p)) => (w, p.parse::<u8>().ok()),
-        None => (s, None),
-    };
+/// The widest a formatted number is padded to, in characters.
+pub const MAX_WIDTH: u32 = 64;
+/// The most digits written after the point (an f64 has 17 significant digits).
+pub const MAX_PRECISION: u32 = 17;
+
+/// A checked format spec (`{x:03.1}` or `format(x, "03.1")`) as the JIT's number format:
+/// one rule for both, width clamped to [`MAX_WIDTH`], precision to [`MAX_PRECISION`].
+pub fn num_format(s: &FormatSpec) -> jit::NumFormat {
     jit::NumFormat {
-        zero: w.starts_with('0') && w.len() > 1,
-        width: w.parse::<u8>().ok().filter(|w| *w > 0),
-        precision: p.map(|p| p.min(17)),
+        zero: s.zero,
+        width: s.width.filter(|w| *w > 0).map(|w| w.min(MAX_WIDTH) as u8),
+        precision: s.precision.map(|p| p.min(MAX_PRECISION) as u8),
     }
+}
+
+/// `format()`'s spec string, parsed by the checker's one parser (`[0][width][.precision]`);
+/// `None` when the checker refuses it.
+pub fn parse_spec(s: &str) -> Option<FormatSpec> {
+    mocu_language::passes::check_types::parse_spec(s)
 }
