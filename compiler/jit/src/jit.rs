@@ -182,10 +182,16 @@ fn helper_symbols() -> Vec<(&'static str, *const u8)> {
 fn declare_helpers(module: &mut JITModule) -> Result<Helpers, JitError> {
     let ptr = module.target_config().pointer_type();
     let cc = module.target_config().default_call_conv;
+    // Narrow integers (our booleans, `i8`) are widened by the caller: rustc (LLVM) compiles
+    // a `u8` parameter of an `extern "C"` function assuming its register holds it
+    // zero-extended to 32 bits, and Cranelift leaves the upper bits as they are unless the
+    // parameter says `uext`. Without it, a release build of `fmt_bool` read `false` from
+    // the low byte and its length from the whole register, and wrote "fals".
+    let param = |t: Type| if t.bits() < 32 { AbiParam::new(t).uext() } else { AbiParam::new(t) };
     let sig = |params: &[Type], ret: Option<Type>| -> Signature {
         let mut s = Signature::new(cc);
-        s.params.extend(params.iter().map(|t| AbiParam::new(*t)));
-        s.returns.extend(ret.map(AbiParam::new));
+        s.params.extend(params.iter().map(|t| param(*t)));
+        s.returns.extend(ret.map(param));
         s
     };
     let (f, i64_, i8_) = (types::F64, types::I64, types::I8);
