@@ -187,7 +187,7 @@ impl GpuCompositor {
         let pipeline =
             make_pipeline(&device, &shader, &layout, "vs_layer", "fs_layer", FRAME_FORMAT, true);
         let frame = make_frame(&device, width, height);
-        let bg = crate::compose::premul(background);
+        let bg = crate::pixel::premultiply(background);
         let f = |v: u8| v as f64 / 255.0;
         Ok(GpuCompositor {
             adapter: format!("{} via {:?}", info.name, info.backend),

@@ -21,14 +21,7 @@ impl Image {
         if rgba.len() != width as usize * height as usize * 4 {
             return None;
         }
-        for px in rgba.chunks_exact_mut(4) {
-            let a = px[3] as u16;
-            if a != 255 {
-                for c in &mut px[..3] {
-                    *c = ((*c as u16 * a + 127) / 255) as u8;
-                }
-            }
-        }
+        crate::pixel::premultiply_in_place(&mut rgba);
         let pixmap =
             tiny_skia::Pixmap::from_vec(rgba, tiny_skia::IntSize::from_wh(width, height)?)?;
         Some(Image { pixmap: Arc::new(pixmap) })

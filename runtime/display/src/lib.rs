@@ -22,6 +22,7 @@ mod gpu;
 mod image;
 mod paint;
 mod path;
+pub mod pixel;
 mod skia;
 mod text;
 #[cfg(feature = "gpu")]

@@ -7,6 +7,7 @@ use crate::color::Color;
 use crate::geom::{IRect, Point, Rect, Size, Transform};
 use crate::image::Image;
 use crate::path::Path;
+use crate::pixel;
 use crate::text;
 use tiny_skia::{FillRule, Mask, Paint, Pixmap};
 
@@ -166,82 +167,55 @@ impl SkiaCanvas {
             for p in row.iter_mut() {
                 let c = lut[(acc >> 16).clamp(0, 255) as usize];
                 acc += step;
-                if c[3] == 255 {
-                    *p = c;
-                } else if c[3] != 0 {
-                    let mut px4 = *p;
-                    over(&mut px4, [c[0] as u32, c[1] as u32, c[2] as u32, c[3] as u32]);
-                    *p = px4;
+                if c[3] != 0 {
+                    pixel::over(p, c);
                 }
             }
         }
         true
     }
 
+    /// Draws a shaped run with its top-left corner at pixmap pixel `(ox, oy)`: the run's
+    /// cached coverage mask blended in one pass (glyph by glyph only for colour glyphs).
     fn blit_text(&mut self, run: &text::ShapedRun, ox: i32, oy: i32, color: Color) {
         let clip = self.state.clip;
-        let (pw, _) = (self.pixmap.width() as usize, self.pixmap.height() as usize);
-        let data = self.pixmap.data_mut();
-        let a = color.a as u32;
-        let pre =
-            [div255(color.r as u32 * a), div255(color.g as u32 * a), div255(color.b as u32 * a), a];
+        let pw = self.pixmap.width() as usize;
+        let pre = pixel::premultiply(color);
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        if let Some(m) = text::with_engine(|e| e.mask(run)) {
+            let (mx0, my0) = (ox + m.left, oy + m.top);
+            let r = IRect::new(mx0, my0, m.width as i32, m.height as i32).intersect(&clip);
+            for y in r.y..r.bottom() {
+                let mrow = &m.data[(y - my0) as usize * m.width + (r.x - mx0) as usize..];
+                let row = &mut px[y as usize * pw + r.x as usize..][..r.w as usize];
+                pixel::cover_row(row, pre, &mrow[..r.w as usize]);
+            }
+            return;
+        }
         text::with_engine(|e| {
             for g in &run.glyphs {
                 let Some(img) = e.glyph(g.key) else { continue };
                 let gx = ox + g.x + img.left;
                 let gy = oy + g.y - img.top;
                 let r = IRect::new(gx, gy, img.width as i32, img.height as i32).intersect(&clip);
-                if r.is_empty() {
-                    continue;
-                }
                 for y in r.y..r.bottom() {
                     let my = (y - gy) as usize;
-                    let row = &mut data[(y as usize * pw + r.x as usize) * 4..][..r.w as usize * 4];
-                    for (i, px) in row.chunks_exact_mut(4).enumerate() {
+                    let row = &mut px[y as usize * pw + r.x as usize..][..r.w as usize];
+                    for (i, d) in row.iter_mut().enumerate() {
                         let mx = (r.x - gx) as usize + i;
                         if img.color {
-                            let s = &img.data[(my * img.width as usize + mx) * 4..][..4];
                             // swash colour glyphs are straight RGBA.
-                            let sa = div255(s[3] as u32 * a);
-                            let src = [
-                                div255(s[0] as u32 * sa),
-                                div255(s[1] as u32 * sa),
-                                div255(s[2] as u32 * sa),
-                                sa,
-                            ];
-                            over(px, src);
+                            let s = &img.data[(my * img.width as usize + mx) * 4..][..4];
+                            let a = pixel::div255(s[3] as u32 * color.a as u32) as u8;
+                            pixel::over(d, pixel::premultiply(Color::rgba(s[0], s[1], s[2], a)));
                         } else {
-                            let m = img.data[my * img.width as usize + mx] as u32;
-                            if m == 0 {
-                                continue;
-                            }
-                            let src = [
-                                div255(pre[0] * m),
-                                div255(pre[1] * m),
-                                div255(pre[2] * m),
-                                div255(pre[3] * m),
-                            ];
-                            over(px, src);
+                            let k = img.data[my * img.width as usize + mx];
+                            pixel::over_coverage(d, pre, k);
                         }
                     }
                 }
             }
         });
-    }
-}
-
-#[inline]
-pub(crate) fn div255(x: u32) -> u32 {
-    let t = x + 128;
-    (t + (t >> 8)) >> 8
-}
-
-/// Source-over of one premultiplied pixel.
-#[inline]
-fn over(px: &mut [u8], src: [u32; 4]) {
-    let inv = 255 - src[3];
-    for c in 0..4 {
-        px[c] = (src[c] + div255(px[c] as u32 * inv)).min(255) as u8;
     }
 }
 
@@ -260,7 +234,7 @@ fn gradient_lut(stops: &[(f32, Color)]) -> [[u8; 4]; 256] {
                 Color::rgba(m(c0.r, c1.r), m(c0.g, c1.g), m(c0.b, c1.b), m(c0.a, c1.a))
             }
         };
-        crate::compose::premul(c)
+        pixel::premultiply(c)
     })
 }
 
@@ -331,10 +305,7 @@ impl SkiaCanvas {
         if bbox.is_empty() {
             return Some(());
         }
-        let a = color.a as u32;
-        let pre =
-            [div255(color.r as u32 * a), div255(color.g as u32 * a), div255(color.b as u32 * a), a];
-        let solid = pre.map(|v| v as u8);
+        let solid = pixel::premultiply(color);
         let w = self.pixmap.width() as usize;
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         let cov = |r: f32, d: f32| (r - d + 0.5).clamp(0.0, 1.0);
@@ -375,7 +346,7 @@ impl SkiaCanvas {
                     while e < x1 && solid_at(e) {
                         e += 1;
                     }
-                    crate::compose::blend_span(&mut row[x as usize..e as usize], solid);
+                    pixel::blend_span(&mut row[x as usize..e as usize], solid);
                     x = e;
                     continue;
                 }
@@ -384,13 +355,7 @@ impl SkiaCanvas {
                     let v = cov(ro, d) - if ri > 0.0 { cov(ri, d) } else { 0.0 };
                     (v * 255.0 + 0.5) as u32
                 };
-                if k >= 255 {
-                    crate::compose::over_px(&mut row[x as usize], solid);
-                } else if k > 0 {
-                    let src =
-                        [pre[0] * k, pre[1] * k, pre[2] * k, pre[3] * k].map(|v| div255(v) as u8);
-                    crate::compose::over_px(&mut row[x as usize], src);
-                }
+                pixel::over_coverage(&mut row[x as usize], solid, k.min(255) as u8);
                 x += 1;
             }
         }
@@ -406,24 +371,10 @@ impl SkiaCanvas {
         (dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6).then_some(dev.sx)
     }
 
-    /// Blends `color` at coverage `k` (0..=1) onto pixel `i` of the pixmap.
+    /// Blends premultiplied `pre` at coverage `k` (0..=1) onto pixel `i` of the pixmap.
     #[inline]
-    fn cover(px: &mut [[u8; 4]], i: usize, pre: [u32; 4], k: f32) {
-        let k = (k * 255.0 + 0.5) as u32;
-        if k == 0 {
-            return;
-        }
-        let src = if k >= 255 {
-            pre.map(|v| v as u8)
-        } else {
-            [pre[0] * k, pre[1] * k, pre[2] * k, pre[3] * k].map(|v| div255(v) as u8)
-        };
-        crate::compose::over_px(&mut px[i], src);
-    }
-
-    fn premultiplied(color: Color) -> [u32; 4] {
-        let a = color.a as u32;
-        [div255(color.r as u32 * a), div255(color.g as u32 * a), div255(color.b as u32 * a), a]
+    fn cover(px: &mut [[u8; 4]], i: usize, pre: [u8; 4], k: f32) {
+        pixel::over_coverage(&mut px[i], pre, (k * 255.0 + 0.5) as u8);
     }
 
     /// A stroked circular arc with analytic coverage (butt or round caps): the band
@@ -467,7 +418,7 @@ impl SkiaCanvas {
         if bbox.is_empty() {
             return Some(());
         }
-        let pre = Self::premultiplied(color);
+        let pre = pixel::premultiply(color);
         let w = self.pixmap.width() as usize;
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         let cov = |r: f32, d: f32| (r - d + 0.5).clamp(0.0, 1.0);
@@ -551,7 +502,7 @@ impl SkiaCanvas {
         }
         let dev = self.device();
         let hw = stroke.width * s / 2.0;
-        let pre = Self::premultiplied(color);
+        let pre = pixel::premultiply(color);
         let clip = self.state.clip;
         let w = self.pixmap.width() as usize;
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
