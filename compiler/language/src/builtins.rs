@@ -176,6 +176,12 @@ pub const NATIVES: &[NativeDef] = &[
         events: &["select"],
         doc: "the discovered vehicles",
     },
+    NativeDef {
+        name: "AlertLayer",
+        params: &[],
+        events: &[],
+        doc: "alerts and failed commands (the runtime adds one on top unless a layout places it)",
+    },
 ];
 
 pub fn native(name: &str) -> Option<&'static NativeDef> {

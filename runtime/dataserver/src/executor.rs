@@ -1,15 +1,14 @@
-//! Where DataServer work runs: a small worker pool, serial executors (strands) on top of
-//! it, and a timer for delayed calls. Nothing here knows about objects or properties.
+//! Where DataServer work runs: an elastic worker pool and serial executors (strands) on top
+//! of it (the timer is in `timer.rs`). Nothing here knows about objects or properties.
 
 use crossbeam_channel::{Receiver, Sender};
 use parking_lot::{Condvar, Mutex};
-use std::cmp::Reverse;
-use std::collections::{BinaryHeap, VecDeque};
+use std::collections::VecDeque;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::thread;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 pub(crate) type Job = Box<dyn FnOnce() + Send + 'static>;
 
@@ -52,12 +51,46 @@ pub struct Stats {
     pub callbacks_run: AtomicU64,
     pub panics_caught: AtomicU64,
     pub timer_fired: AtomicU64,
+    /// Workers the pool added because all of them were stuck (see `docs/dataserver.md`).
+    pub workers_added: AtomicU64,
 }
 
+/// The worker pool. It starts with `Config::workers` threads and grows when they are all
+/// stuck: a watchdog thread, woken only when a job is queued while no worker is idle, looks
+/// again after [`STALL`]; if the queue is still waiting, no worker is idle and no job has
+/// started meanwhile, it adds one worker (up to [`MAX_EXTRA`] beyond the base). An extra
+/// worker that finds nothing to do for [`RETIRE`] ends. So callbacks blocked in user code
+/// delay only themselves: the rest of the process is served by the replacement.
 pub(crate) struct Pool {
     tx: Sender<Job>,
+    core: Arc<PoolCore>,
     pub(crate) inflight: Arc<Inflight>,
     pub(crate) stats: Arc<Stats>,
+}
+
+/// How long every worker may be busy, with work waiting, before the pool grows.
+pub(crate) const STALL: Duration = Duration::from_millis(20);
+/// How many workers the pool may add beyond its base.
+pub(crate) const MAX_EXTRA: usize = 64;
+/// How long an added worker waits for work before it ends.
+const RETIRE: Duration = Duration::from_secs(5);
+
+struct PoolCore {
+    rx: Receiver<Job>,
+    inflight: Arc<Inflight>,
+    stats: Arc<Stats>,
+    base: usize,
+    /// Workers alive.
+    workers: AtomicUsize,
+    /// Workers waiting for a job.
+    idle: AtomicUsize,
+    /// Jobs taken by a worker so far (progress, for the watchdog).
+    started: AtomicU64,
+    /// The watchdog waits for a stall (a submit must wake it).
+    armed: AtomicBool,
+    watch: Mutex<bool>,
+    wake: Condvar,
+    next_name: AtomicUsize,
 }
 
 impl Pool {
@@ -65,24 +98,29 @@ impl Pool {
         let (tx, rx) = crossbeam_channel::unbounded::<Job>();
         let inflight = Arc::new(Inflight::default());
         let stats = Arc::new(Stats::default());
-        for i in 0..workers.max(1) {
-            let rx: Receiver<Job> = rx.clone();
-            let inflight = inflight.clone();
-            let stats = stats.clone();
-            thread::Builder::new()
-                .name(format!("dataserver-{i}"))
-                .spawn(move || {
-                    while let Ok(job) = rx.recv() {
-                        if catch_unwind(AssertUnwindSafe(job)).is_err() {
-                            stats.panics_caught.fetch_add(1, Ordering::Relaxed);
-                        }
-                        stats.jobs_run.fetch_add(1, Ordering::Relaxed);
-                        inflight.done();
-                    }
-                })
-                .expect("spawning a DataServer worker thread");
+        let base = workers.max(1);
+        let core = Arc::new(PoolCore {
+            rx,
+            inflight: inflight.clone(),
+            stats: stats.clone(),
+            base,
+            workers: AtomicUsize::new(0),
+            idle: AtomicUsize::new(0),
+            started: AtomicU64::new(0),
+            armed: AtomicBool::new(false),
+            watch: Mutex::new(false),
+            wake: Condvar::new(),
+            next_name: AtomicUsize::new(0),
+        });
+        for _ in 0..base {
+            PoolCore::spawn_worker(&core, false);
         }
-        Arc::new(Pool { tx, inflight, stats })
+        let c = core.clone();
+        thread::Builder::new()
+            .name("dataserver-watchdog".into())
+            .spawn(move || PoolCore::watchdog(c))
+            .expect("spawning the DataServer watchdog thread");
+        Arc::new(Pool { tx, core, inflight, stats })
     }
 
     pub(crate) fn submit(&self, job: Job) {
@@ -90,6 +128,120 @@ impl Pool {
         if self.tx.send(job).is_err() {
             // Workers are gone (shutting down): the job is dropped.
             self.inflight.done();
+            return;
+        }
+        self.core.nudge();
+    }
+
+    /// Workers alive now (the base plus any added while others were stuck).
+    pub(crate) fn workers(&self) -> usize {
+        self.core.workers.load(Ordering::Relaxed)
+    }
+}
+
+impl Drop for Pool {
+    fn drop(&mut self) {
+        *self.core.watch.lock() = true;
+        self.core.wake.notify_all();
+    }
+}
+
+impl PoolCore {
+    fn spawn_worker(core: &Arc<PoolCore>, extra: bool) {
+        core.workers.fetch_add(1, Ordering::AcqRel);
+        let c = core.clone();
+        let i = core.next_name.fetch_add(1, Ordering::Relaxed);
+        let spawned = thread::Builder::new()
+            .name(format!("dataserver-{i}"))
+            .spawn(move || PoolCore::work(c, extra));
+        if spawned.is_err() {
+            core.workers.fetch_sub(1, Ordering::AcqRel);
+        }
+    }
+
+    fn work(core: Arc<PoolCore>, extra: bool) {
+        loop {
+            core.idle.fetch_add(1, Ordering::SeqCst);
+            let job = if extra {
+                match core.rx.recv_timeout(RETIRE) {
+                    Ok(job) => Some(job),
+                    Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
+                        core.idle.fetch_sub(1, Ordering::SeqCst);
+                        if core.retire() {
+                            return;
+                        }
+                        continue;
+                    }
+                    Err(crossbeam_channel::RecvTimeoutError::Disconnected) => None,
+                }
+            } else {
+                core.rx.recv().ok()
+            };
+            core.idle.fetch_sub(1, Ordering::SeqCst);
+            // Taking the last idle worker with work still queued may start a stall.
+            core.nudge();
+            let Some(job) = job else {
+                core.workers.fetch_sub(1, Ordering::AcqRel);
+                return;
+            };
+            core.started.fetch_add(1, Ordering::Relaxed);
+            if catch_unwind(AssertUnwindSafe(job)).is_err() {
+                core.stats.panics_caught.fetch_add(1, Ordering::Relaxed);
+            }
+            core.stats.jobs_run.fetch_add(1, Ordering::Relaxed);
+            core.inflight.done();
+        }
+    }
+
+    /// An added worker leaves if the pool is above its base.
+    fn retire(&self) -> bool {
+        let mut n = self.workers.load(Ordering::Acquire);
+        while n > self.base {
+            match self.workers.compare_exchange(n, n - 1, Ordering::AcqRel, Ordering::Acquire) {
+                Ok(_) => return true,
+                Err(now) => n = now,
+            }
+        }
+        false
+    }
+
+    fn stalled(&self) -> bool {
+        self.idle.load(Ordering::SeqCst) == 0 && !self.rx.is_empty()
+    }
+
+    /// Wakes the watchdog if work waits while no worker is idle (two loads otherwise).
+    fn nudge(&self) {
+        if self.armed.load(Ordering::SeqCst) && self.stalled() {
+            let _g = self.watch.lock();
+            self.wake.notify_one();
+        }
+    }
+
+    fn watchdog(core: Arc<PoolCore>) {
+        let mut stop = core.watch.lock();
+        loop {
+            if *stop {
+                return;
+            }
+            if !core.stalled() {
+                core.armed.store(true, Ordering::SeqCst);
+                // Re-checked under the lock a submit takes to wake us: no lost wake-up.
+                if !core.stalled() {
+                    core.wake.wait(&mut stop);
+                }
+                core.armed.store(false, Ordering::SeqCst);
+                continue;
+            }
+            let seen = core.started.load(Ordering::Relaxed);
+            core.wake.wait_for(&mut stop, STALL);
+            if *stop {
+                return;
+            }
+            let grown = core.workers.load(Ordering::Acquire) >= core.base + MAX_EXTRA;
+            if core.stalled() && core.started.load(Ordering::Relaxed) == seen && !grown {
+                core.stats.workers_added.fetch_add(1, Ordering::Relaxed);
+                PoolCore::spawn_worker(&core, true);
+            }
         }
     }
 }
@@ -174,96 +326,6 @@ impl SerialInner {
         // Still work left: requeue behind other modules' work instead of hogging a worker.
         let pool = this.pool.clone();
         pool.submit(Box::new(move || SerialInner::drain(this)));
-    }
-}
-
-/// Delayed work: a heap of deadlines served by one timer thread that sleeps until the
-/// earliest one (no polling, no periodic wake-up when there is nothing to do).
-pub(crate) struct Timer {
-    shared: Arc<TimerShared>,
-}
-
-struct TimerShared {
-    state: Mutex<TimerState>,
-    wake: Condvar,
-    pending: AtomicUsize,
-}
-
-#[derive(Default)]
-struct TimerState {
-    heap: BinaryHeap<Reverse<(Instant, u64)>>,
-    jobs: std::collections::HashMap<u64, (Target, Job)>,
-    seq: u64,
-    stop: bool,
-}
-
-impl Timer {
-    pub(crate) fn new(stats: Arc<Stats>) -> Timer {
-        let shared = Arc::new(TimerShared {
-            state: Mutex::default(),
-            wake: Condvar::new(),
-            pending: AtomicUsize::new(0),
-        });
-        let s = shared.clone();
-        thread::Builder::new()
-            .name("dataserver-timer".into())
-            .spawn(move || Timer::run(s, stats))
-            .expect("spawning the DataServer timer thread");
-        Timer { shared }
-    }
-
-    pub(crate) fn schedule(&self, delay: Duration, target: Target, job: Job) {
-        let mut st = self.shared.state.lock();
-        st.seq += 1;
-        let id = st.seq;
-        let due = Instant::now() + delay;
-        let earliest = st.heap.peek().map(|Reverse((t, _))| *t);
-        st.heap.push(Reverse((due, id)));
-        st.jobs.insert(id, (target, job));
-        self.shared.pending.fetch_add(1, Ordering::Relaxed);
-        if earliest.is_none_or(|e| due < e) {
-            self.shared.wake.notify_one();
-        }
-    }
-
-    /// Delayed jobs not yet due.
-    pub(crate) fn pending(&self) -> usize {
-        self.shared.pending.load(Ordering::Relaxed)
-    }
-
-    fn run(shared: Arc<TimerShared>, stats: Arc<Stats>) {
-        let mut st = shared.state.lock();
-        loop {
-            if st.stop {
-                return;
-            }
-            let now = Instant::now();
-            match st.heap.peek().map(|Reverse(x)| *x) {
-                Some((due, id)) if due <= now => {
-                    st.heap.pop();
-                    if let Some((target, job)) = st.jobs.remove(&id) {
-                        shared.pending.fetch_sub(1, Ordering::Relaxed);
-                        stats.timer_fired.fetch_add(1, Ordering::Relaxed);
-                        drop(st);
-                        target.submit(job);
-                        st = shared.state.lock();
-                    }
-                }
-                Some((due, _)) => {
-                    shared.wake.wait_until(&mut st, due);
-                }
-                None => shared.wake.wait(&mut st),
-            }
-        }
-    }
-}
-
-impl Drop for Timer {
-    fn drop(&mut self) {
-        let mut st = self.shared.state.lock();
-        st.stop = true;
-        st.jobs.clear();
-        self.shared.wake.notify_all();
     }
 }
 

@@ -9,6 +9,8 @@
 //! renderer, input devices or file watching. Writes run on the caller's thread;
 //! notification work runs on the DataServer's own workers.
 
+mod call;
+mod clock;
 mod error;
 mod executor;
 mod hash;
@@ -17,15 +19,19 @@ mod method;
 mod notification;
 mod object;
 mod path;
+mod props;
 mod server;
 mod snapshot;
 mod stream;
 mod subscription;
+mod timer;
 
+pub use call::{Call, Responder};
+pub use clock::{Clock, ManualClock, SystemClock};
 pub use error::{DsError, ObjRef};
 pub use executor::{Executor, Stats};
 pub use meta::{ObjectInfo, PropMeta};
-pub use method::{Call, CallMode, CallOptions, CallOutcome, MethodSpec, ParamSpec, Responder};
+pub use method::{CallMode, CallOptions, CallOutcome, MethodSpec, ParamSpec};
 pub use mocu_value::{Guid, PropName, Value, ValueKind};
 pub use notification::{Kind, Notification, Subject};
 pub use path::{DottedPath, PathEvent, PathWatch};

@@ -1,13 +1,12 @@
 //! Methods on objects: the paper's answer to control feedback (§3.2). A call is Accepted,
 //! Refused with the module's reason, Failed, TimedOut, or finds no such object or method.
 
+use crate::call::Call;
 use crate::error::{DsError, ObjRef};
 use crate::executor::{Executor, Target};
 use crate::server::{DataServer, obj_ref_of};
 use mocu_value::{Guid, PropName, Value, ValueKind};
-use parking_lot::Mutex;
 use std::fmt;
-use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -161,70 +160,11 @@ impl fmt::Display for CallOutcome {
     }
 }
 
-type Completion = Box<dyn FnOnce(CallOutcome) + Send + 'static>;
-
-struct ReplySlot {
-    done: Mutex<Option<Completion>>,
-}
-
-impl ReplySlot {
-    fn finish(&self, outcome: CallOutcome) -> bool {
-        let done = self.done.lock().take();
-        match done {
-            Some(f) => {
-                f(outcome);
-                true
-            }
-            None => false,
-        }
-    }
-}
-
-/// The right to answer one call, once. Dropping it unanswered answers `Failed`.
-pub struct Responder {
-    slot: Option<Arc<ReplySlot>>,
-}
-
-impl Responder {
-    /// Answers the call. Returns false when the call had already ended (timed out).
-    pub fn reply(mut self, outcome: CallOutcome) -> bool {
-        self.slot.take().is_some_and(|s| s.finish(outcome))
-    }
-
-    pub fn accept(self, results: Vec<Value>) -> bool {
-        self.reply(CallOutcome::Accepted(results))
-    }
-
-    pub fn refuse(self, reason: impl Into<String>) -> bool {
-        self.reply(CallOutcome::Refused(reason.into()))
-    }
-
-    pub fn fail(self, error: impl Into<String>) -> bool {
-        self.reply(CallOutcome::Failed(error.into()))
-    }
-}
-
-impl Drop for Responder {
-    fn drop(&mut self) {
-        if let Some(s) = self.slot.take() {
-            s.finish(CallOutcome::Failed("the method's handler ended without answering".into()));
-        }
-    }
-}
-
-/// One call as its handler sees it.
-pub struct Call {
-    pub object: Guid,
-    pub method: PropName,
-    pub args: Arc<[Value]>,
-    pub responder: Responder,
-}
-
 pub(crate) type Handler = Arc<dyn Fn(Call) + Send + Sync + 'static>;
 
 pub(crate) struct Method {
     pub(crate) spec: MethodSpec,
-    handler: Handler,
+    pub(crate) handler: Handler,
     executor: Option<Executor>,
 }
 
@@ -308,104 +248,9 @@ impl DataServer {
         v.sort_by(|a, b| a.name.as_str().cmp(b.name.as_str()));
         Ok(v)
     }
-
-    /// Calls a method. `done` receives the outcome exactly once: on this thread for
-    /// immediate calls and for calls that cannot start, else where the handler answers.
-    /// `options` overrides the method's default call options.
-    pub fn call(
-        &self,
-        guid: Guid,
-        name: impl Into<PropName>,
-        args: Vec<Value>,
-        options: Option<CallOptions>,
-        done: impl FnOnce(CallOutcome) + Send + 'static,
-    ) {
-        let name = name.into();
-        let method = match self.object(guid) {
-            Err(_) => return done(CallOutcome::NoSuchObject),
-            Ok(o) => {
-                let os = o.state.read();
-                if !os.alive {
-                    return done(CallOutcome::NoSuchObject);
-                }
-                match os.methods.get(&name) {
-                    Some(m) => m.clone(),
-                    None => return done(CallOutcome::NoSuchMethod),
-                }
-            }
-        };
-        let args = match check_args(&method.spec, args) {
-            Ok(a) => a,
-            Err(why) => return done(CallOutcome::Failed(why)),
-        };
-        let options = options.unwrap_or(method.spec.defaults);
-        let slot = Arc::new(ReplySlot { done: Mutex::new(Some(Box::new(done))) });
-        if let Some(t) = options.timeout {
-            let s = slot.clone();
-            self.inner.timer.schedule(
-                t,
-                Target::Pool(self.inner.pool.clone()),
-                Box::new(move || {
-                    s.finish(CallOutcome::TimedOut);
-                }),
-            );
-        }
-        let call =
-            Call { object: guid, method: name, args, responder: Responder { slot: Some(slot) } };
-        let handler = method.handler.clone();
-        let stats = self.inner.pool.stats.clone();
-        let run = move || {
-            // A panicking handler drops its responder while unwinding: the caller sees
-            // Failed, and the OCU goes on. Counted like any other caught panic.
-            if catch_unwind(AssertUnwindSafe(|| handler(call))).is_err() {
-                stats.panics_caught.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-            }
-        };
-        if options.mode == CallMode::Immediate && options.delay.is_zero() {
-            run();
-            return;
-        }
-        let target = method.target(&self.inner.pool);
-        if options.delay.is_zero() {
-            target.submit(Box::new(run));
-        } else {
-            self.inner.timer.schedule(options.delay, target, Box::new(run));
-        }
-    }
-
-    /// Calls a method and waits for its outcome. Not for use on a serial executor that the
-    /// method itself runs on (it would wait for itself).
-    pub fn call_wait(
-        &self,
-        guid: Guid,
-        name: impl Into<PropName>,
-        args: Vec<Value>,
-        options: Option<CallOptions>,
-    ) -> CallOutcome {
-        let (tx, rx) = crossbeam_channel::bounded(1);
-        self.call(guid, name, args, options, move |o| {
-            let _ = tx.send(o);
-        });
-        rx.recv().unwrap_or(CallOutcome::Failed("the call was dropped".into()))
-    }
-
-    /// Runs `f` on `executor` (or any worker) after `delay`: how a module does periodic
-    /// work without a thread of its own (re-arm from inside `f`).
-    pub fn run_after(
-        &self,
-        delay: Duration,
-        executor: Option<&Executor>,
-        f: impl FnOnce() + Send + 'static,
-    ) {
-        let target = match executor {
-            Some(ex) => Target::Serial(ex.clone()),
-            None => Target::Pool(self.inner.pool.clone()),
-        };
-        self.inner.timer.schedule(delay, target, Box::new(f));
-    }
 }
 
-fn check_args(spec: &MethodSpec, args: Vec<Value>) -> Result<Arc<[Value]>, String> {
+pub(crate) fn check_args(spec: &MethodSpec, args: Vec<Value>) -> Result<Arc<[Value]>, String> {
     if args.len() != spec.params.len() {
         let names: Vec<&str> = spec.params.iter().map(|p| &*p.name).collect();
         return Err(format!(

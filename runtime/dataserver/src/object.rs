@@ -30,6 +30,8 @@ pub(crate) struct Prop {
     pub(crate) name: PropName,
     pub(crate) value: Value,
     pub(crate) meta: Option<Arc<PropMeta>>,
+    /// When the last write arrived (on the server's clock), changing or not.
+    pub(crate) received: std::time::Instant,
 }
 
 /// Properties kept in creation order, found by a linear scan while few and through an

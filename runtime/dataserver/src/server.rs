@@ -1,13 +1,15 @@
 //! The DataServer: the object tree, properties and subscriptions.
 
+use crate::clock::{Clock, SystemClock};
 use crate::error::{DsError, ObjRef};
-use crate::executor::{Executor, Pool, Stats, Target, Timer};
+use crate::executor::{Executor, Pool, Stats, Target};
 use crate::hash::BuildIdHasher;
-use crate::meta::{ObjectInfo, PropMeta};
+use crate::meta::ObjectInfo;
 use crate::notification::{Kind, Notification, Subject};
-use crate::object::{ObjState, Object, Prop};
+use crate::object::{ObjState, Object};
 use crate::subscription::{Callback, Sub, SubscriptionId, Topic};
-use mocu_value::{Guid, PropName, Value, ValueKind};
+use crate::timer::Timer;
+use mocu_value::Guid;
 use parking_lot::Mutex;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -53,8 +55,14 @@ impl Default for DataServer {
 
 impl DataServer {
     pub fn new(config: Config) -> DataServer {
+        DataServer::with_clock(config, Arc::new(SystemClock))
+    }
+
+    /// A DataServer whose timers, delayed calls, timeouts and `received_at` read `clock`
+    /// (a [`crate::ManualClock`] in tests: advancing it fires what falls due).
+    pub fn with_clock(config: Config, clock: Arc<dyn Clock>) -> DataServer {
         let pool = Pool::new(config.workers);
-        let timer = Timer::new(pool.stats.clone());
+        let timer = Timer::new(pool.stats.clone(), clock);
         let inner = Inner {
             objects: papaya::HashMap::builder().hasher(BuildIdHasher::default()).build(),
             structure: Mutex::new(()),
@@ -72,6 +80,16 @@ impl DataServer {
 
     pub fn root(&self) -> Guid {
         Guid::ROOT
+    }
+
+    /// The server's clock (the one given to `with_clock`, else the system clock).
+    pub fn clock(&self) -> &Arc<dyn Clock> {
+        self.inner.timer.clock()
+    }
+
+    /// The current time on the server's clock.
+    pub fn now(&self) -> std::time::Instant {
+        self.inner.timer.clock().now()
     }
 
     // ----- objects -------------------------------------------------------------------
@@ -309,131 +327,6 @@ impl DataServer {
         self.inner.objects.len()
     }
 
-    // ----- properties ----------------------------------------------------------------
-
-    /// Creates a property with metadata; refused if the name is taken or the value does
-    /// not fit the metadata.
-    pub fn create_property(
-        &self,
-        guid: Guid,
-        name: impl Into<PropName>,
-        value: Value,
-        meta: PropMeta,
-    ) -> Result<(), DsError> {
-        let name = name.into();
-        let o = self.object(guid)?;
-        let mut os = o.state.write();
-        if !os.alive {
-            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(guid) });
-        }
-        if os.props.get(name).is_some() {
-            return Err(DsError::PropertyExists { object: obj_ref_of(guid, &os), property: name });
-        }
-        let value = validate(guid, &os, name, &meta, value)?;
-        let meta = (meta != PropMeta::default()).then(|| Arc::new(meta));
-        add_prop(&mut os, name, value, meta);
-        Ok(())
-    }
-
-    /// Writes a property, creating it (untyped) if absent. A write equal to the current
-    /// value changes nothing and notifies nobody.
-    pub fn set(&self, guid: Guid, name: impl Into<PropName>, value: Value) -> Result<(), DsError> {
-        let name = name.into();
-        let o = self.object(guid)?;
-        let mut os = o.state.write();
-        if !os.alive {
-            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(guid) });
-        }
-        match os.props.get(name) {
-            None => {
-                add_prop(&mut os, name, value, None);
-                Ok(())
-            }
-            Some(p) => {
-                let value = match &p.meta {
-                    Some(meta) => validate(guid, &os, name, meta, value)?,
-                    None => value,
-                };
-                if p.value == value {
-                    return Ok(());
-                }
-                let os = &mut *os;
-                let p = os.props.get_mut(name).expect("found above under the same lock");
-                p.value = value.clone();
-                notify_prop(&os.prop_subs, guid, Kind::Changed, name, Some(value));
-                Ok(())
-            }
-        }
-    }
-
-    /// Writes an existing property; refused if it does not exist.
-    pub fn update(
-        &self,
-        guid: Guid,
-        name: impl Into<PropName>,
-        value: Value,
-    ) -> Result<(), DsError> {
-        let name = name.into();
-        {
-            let o = self.object(guid)?;
-            let os = o.state.read();
-            if os.props.get(name).is_none() {
-                return Err(DsError::NoSuchProperty {
-                    object: obj_ref_of(guid, &os),
-                    property: name,
-                });
-            }
-        }
-        self.set(guid, name, value)
-    }
-
-    /// Reads a property's current value.
-    pub fn get(&self, guid: Guid, name: impl Into<PropName>) -> Result<Value, DsError> {
-        let name = name.into();
-        let o = self.object(guid)?;
-        let os = o.state.read();
-        match os.props.get(name) {
-            Some(p) => Ok(p.value.clone()),
-            None => Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name }),
-        }
-    }
-
-    /// Reads a property, `None` when the object or the property is absent.
-    pub fn try_get(&self, guid: Guid, name: PropName) -> Option<Value> {
-        let objects = self.inner.objects.pin();
-        let o = objects.get(&guid)?;
-        let os = o.state.read();
-        os.props.get(name).map(|p| p.value.clone())
-    }
-
-    pub fn meta(&self, guid: Guid, name: impl Into<PropName>) -> Result<PropMeta, DsError> {
-        let name = name.into();
-        let o = self.object(guid)?;
-        let os = o.state.read();
-        match os.props.get(name) {
-            Some(p) => Ok(p.meta.as_deref().cloned().unwrap_or_default()),
-            None => Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name }),
-        }
-    }
-
-    /// The object's properties with their values, in creation order.
-    pub fn properties(&self, guid: Guid) -> Result<Vec<(PropName, Value)>, DsError> {
-        let o = self.object(guid)?;
-        let os = o.state.read();
-        Ok(os.props.iter().map(|p| (p.name, p.value.clone())).collect())
-    }
-
-    pub fn delete_property(&self, guid: Guid, name: impl Into<PropName>) -> Result<(), DsError> {
-        let name = name.into();
-        let o = self.object(guid)?;
-        let mut os = o.state.write();
-        if os.props.remove(name).is_none() {
-            return Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name });
-        }
-        notify_prop(&os.prop_subs, guid, Kind::Deleted, name, None);
-        Ok(())
-    }
-
     // ----- subscriptions -------------------------------------------------------------
 
     /// Subscribes; the callback runs on the DataServer's workers, one notification at a
@@ -521,13 +414,29 @@ impl DataServer {
     /// again (unless called from that very callback, which then finishes). Unknown or
     /// already-ended ids are ignored: ending twice is harmless.
     pub fn unsubscribe(&self, id: SubscriptionId) {
-        let Some((guid, sub)) = self.inner.subs.pin().remove(&id).cloned() else { return };
-        sub.cancel();
+        if let Some(sub) = self.end_subscription(id) {
+            sub.wait_idle();
+        }
+    }
+
+    /// Ends a subscription without waiting: when it returns, the callback will not start
+    /// again, but a call already running (on another thread) may still finish. Never
+    /// blocks on the callback, so it is the form for `Drop` impls and for code that holds a
+    /// lock the callback may need (waiting `unsubscribe` there can deadlock). Unknown or
+    /// already-ended ids are ignored.
+    pub fn unsubscribe_nowait(&self, id: SubscriptionId) {
+        self.end_subscription(id);
+    }
+
+    fn end_subscription(&self, id: SubscriptionId) -> Option<Arc<Sub>> {
+        let (guid, sub) = self.inner.subs.pin().remove(&id).cloned()?;
+        sub.stop();
         if let Ok(o) = self.object(guid) {
             let mut os = o.state.write();
             os.prop_subs.retain(|s| s.id != id);
             os.child_subs.retain(|s| s.id != id);
         }
+        Some(sub)
     }
 
     /// Live subscriptions (for leak tests and statistics).
@@ -549,7 +458,14 @@ impl DataServer {
         crate::executor::wait_quiet(&self.inner.pool);
     }
 
-    /// Delayed calls not yet due.
+    /// Worker threads alive now: `Config::workers`, plus any the pool added while all of
+    /// them were stuck (see `docs/dataserver.md`).
+    pub fn worker_count(&self) -> usize {
+        self.inner.pool.workers()
+    }
+
+    /// Timers not yet due: delayed calls, `run_after` jobs and call timeouts (an answered
+    /// call's timeout is released at once and does not count).
     pub fn pending_timers(&self) -> usize {
         self.inner.timer.pending()
     }
@@ -562,21 +478,6 @@ impl DataServer {
 
 pub(crate) fn obj_ref_of(guid: Guid, os: &ObjState) -> ObjRef {
     ObjRef { guid, name: Some(os.info.name.clone()) }
-}
-
-fn add_prop(os: &mut ObjState, name: PropName, value: Value, meta: Option<Arc<PropMeta>>) {
-    os.props.insert(Prop { name, value: value.clone(), meta });
-    notify_prop(&os.prop_subs, os.self_guid, Kind::New, name, Some(value));
-}
-
-fn notify_prop(subs: &[Arc<Sub>], guid: Guid, kind: Kind, name: PropName, value: Option<Value>) {
-    for s in subs.iter().filter(|s| s.wants(name)) {
-        s.enqueue(Notification {
-            object: guid,
-            kind,
-            subject: Subject::Property { name, value: value.clone() },
-        });
-    }
 }
 
 fn child_note(
@@ -607,39 +508,4 @@ fn notify_child(ps: &ObjState, kind: Kind, child: Guid, info: &ObjectInfo, index
     for s in &ps.child_subs {
         s.enqueue(n.clone());
     }
-}
-
-/// Checks a write against a property's metadata; returns the value to store.
-fn validate(
-    guid: Guid,
-    os: &ObjState,
-    name: PropName,
-    meta: &PropMeta,
-    value: Value,
-) -> Result<Value, DsError> {
-    let value = match (meta.kind, value) {
-        (None, v) => v,
-        (Some(ValueKind::Float), Value::Int(i)) => Value::Float(i as f64),
-        (Some(k), v) if v.kind() == k => v,
-        (Some(k), v) => {
-            return Err(DsError::TypeMismatch {
-                object: obj_ref_of(guid, os),
-                property: name,
-                expected: k,
-                got: v.kind(),
-            });
-        }
-    };
-    if let (Some((min, max)), Some(x)) = (meta.range, value.as_f64())
-        && !(min <= x && x <= max)
-    {
-        return Err(DsError::OutOfRange {
-            object: obj_ref_of(guid, os),
-            property: name,
-            value: x,
-            min,
-            max,
-        });
-    }
-    Ok(value)
 }

@@ -238,16 +238,21 @@ impl Sub {
         }
     }
 
-    /// Stops delivery. When this returns, the callback is not running and never runs
-    /// again — except when called from inside this subscription's own callback, which then
-    /// finishes normally.
-    pub(crate) fn cancel(&self) {
-        self.active.store(false, Ordering::Release);
+    /// Stops delivery without waiting: no callback starts after this returns (one already
+    /// running may finish). Pending notifications are dropped.
+    pub(crate) fn stop(&self) {
+        self.active.store(false, Ordering::SeqCst);
+        let pending = self.queue.lock().take_all();
+        drop(pending);
+    }
+
+    /// Waits until the callback is not running — except when called from inside this
+    /// subscription's own callback, which then finishes normally.
+    pub(crate) fn wait_idle(&self) {
         let me = std::thread::current().id();
         let mut q = self.queue.lock();
         while q.running_on.is_some() && q.running_on != Some(me) {
             self.idle.wait(&mut q);
         }
-        q.take_all();
     }
 }

@@ -2,7 +2,9 @@
 use mocu_dataserver::*;
 use std::sync::{Arc, Mutex};
 
-fn watch(ds: &DataServer, path: &str) -> (PathWatch, Arc<Mutex<Vec<(Kind, Option<Value>)>>>) {
+type Log = Arc<Mutex<Vec<(Kind, Option<Value>)>>>;
+
+fn watch(ds: &DataServer, path: &str) -> (PathWatch, Log) {
     let log = Arc::new(Mutex::new(Vec::new()));
     let l = log.clone();
     let w = ds
@@ -13,10 +15,7 @@ fn watch(ds: &DataServer, path: &str) -> (PathWatch, Arc<Mutex<Vec<(Kind, Option
     (w, log)
 }
 
-fn take(
-    ds: &DataServer,
-    log: &Arc<Mutex<Vec<(Kind, Option<Value>)>>>,
-) -> Vec<(Kind, Option<Value>)> {
+fn take(ds: &DataServer, log: &Log) -> Vec<(Kind, Option<Value>)> {
     ds.quiesce();
     std::mem::take(&mut *log.lock().unwrap())
 }

@@ -123,6 +123,12 @@ impl Shared {
                 return;
             }
             done = true;
+            // A failed command is an alert too (mocu-layout): its feedback entry shows it.
+            if sh.ds.try_get(alert, PropName::new("source")).as_ref().and_then(Value::as_str)
+                == Some("command")
+            {
+                return;
+            }
             let text = n.value().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
             let sev = sh
                 .ds

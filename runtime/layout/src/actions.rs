@@ -23,6 +23,8 @@ pub(crate) enum CompiledAction {
     Alert { level: String, func: FnRef },
     Mode(String),
     Select(Select),
+    /// Acknowledge every alert (the runtime's own Escape / `select` bindings).
+    Acknowledge,
 }
 
 #[derive(Clone, Debug)]
@@ -97,7 +99,7 @@ pub(crate) struct ActionCtx {
     pub(crate) origin: Option<Guid>,
 }
 
-fn now() -> f64 {
+pub(crate) fn now() -> f64 {
     SystemTime::now().duration_since(UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
 }
 
@@ -107,8 +109,21 @@ pub(crate) fn operator_child(sh: &Shared, name: &str, kind: &str) -> Option<Guid
     crate::graph::ensure_object(&sh.ds, op, name, kind).ok()
 }
 
-/// Shows a call's state on the issuing control and in `root.operator.feedback`.
-fn feedback(sh: &Shared, origin: Option<Guid>, target: &str, state: &str, reason: &str) {
+/// Shows a call's state on the issuing control and in `root.operator.feedback`; a call
+/// that did not succeed is also an alert (`source` `command`), so the operator sees it
+/// whatever the layout shows.
+fn feedback(sh: &Arc<Shared>, origin: Option<Guid>, target: &str, state: &str, reason: &str) {
+    if crate::alerts::is_failure(state) {
+        let short = target.strip_prefix("root.").unwrap_or(target);
+        let short = short.strip_prefix("vehicles.").unwrap_or(short);
+        let what = state.replace('_', " ");
+        let text = if reason.is_empty() {
+            format!("{short}: {what}")
+        } else {
+            format!("{short}: {what} — {reason}")
+        };
+        crate::alerts::raise(sh, "warning", &text, "command");
+    }
     let ds = &sh.ds;
     if let Some(w) = origin {
         let _ = ds.set(w, "feedback", Value::str(state));
@@ -240,6 +255,7 @@ pub(crate) fn run_actions(
                     .record("action", &[("kind", Value::str("mode")), ("mode", Value::str(mode))]);
             }
             CompiledAction::Select(target) => select(sh, target, cx),
+            CompiledAction::Acknowledge => crate::alerts::acknowledge(sh, cx),
             CompiledAction::Alert { level, func } => {
                 let text = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input)
                     .remove(0)
@@ -356,28 +372,9 @@ fn swap(sh: &Arc<Shared>, a: &str, b: &str, ms: f64) {
     }
 }
 
-/// Publishes an alert under `root.operator.alerts` (severity, text, time, acknowledged,
-/// active) with an `acknowledge` method.
+/// Raises a layout's `alert` (see [`crate::alerts`]).
 pub(crate) fn raise_alert(sh: &Arc<Shared>, level: &str, text: &str) -> Option<Guid> {
-    let alerts = operator_child(sh, "alerts", "alerts")?;
-    let n = sh.ds.children(alerts).map_or(0, |c| c.len());
-    let g = sh
-        .ds
-        .create_object(alerts, ObjectInfo::new(&format!("alert{}", n + 1), "alert").subtype(level))
-        .ok()?;
-    let ds = &sh.ds;
-    let _ = ds.set(g, "severity", Value::str(level));
-    let _ = ds.set(g, "text", Value::str(text));
-    let _ = ds.set(g, "time", Value::Float(now()));
-    let _ = ds.set(g, "acknowledged", Value::Bool(false));
-    let _ = ds.set(g, "active", Value::Bool(true));
-    let ds2 = ds.clone();
-    let _ = ds.publish_method_fn(g, MethodSpec::new("acknowledge"), move |_| {
-        let _ = ds2.set(g, "acknowledged", Value::Bool(true));
-        CallOutcome::Accepted(vec![])
-    });
-    sh.sink.record("alert", &[("severity", Value::str(level)), ("text", Value::str(text))]);
-    Some(g)
+    crate::alerts::raise(sh, level, text, "layout")
 }
 
 /// Publishes each widget event (`press`, …) as a method of the widget object: whoever
@@ -430,6 +427,22 @@ pub(crate) fn binding_key(b: &Binding) -> String {
         shift: b.shift,
         shift_input: b.shift_input.clone(),
         shaping: b.shaping.clone(),
+    };
+    serde_json::to_string(&spec).unwrap_or_default()
+}
+
+/// The key of a plain (unshaped, every-mode) button or key binding the runtime adds itself.
+pub(crate) fn button_key(device: &str, kind: &str, input: &str, event: &str) -> String {
+    let spec = BindingSpec {
+        device: device.into(),
+        kind: kind.into(),
+        input: input.into(),
+        event: event.into(),
+        hold_ms: 0.0,
+        mode: None,
+        shift: false,
+        shift_input: None,
+        shaping: Shaping::default(),
     };
     serde_json::to_string(&spec).unwrap_or_default()
 }

@@ -30,6 +30,11 @@ pub struct LayoutConfig {
     pub jit: bool,
     /// Name of the layout (its file), for the event log.
     pub name: String,
+    /// Add the built-in alert window when the layout places no `AlertLayer` (see
+    /// `alerts.rs`); off only for tests of a bare display.
+    pub alert_layer: bool,
+    /// Write each alert once on the terminal (stderr).
+    pub alerts_to_terminal: bool,
 }
 
 impl Default for LayoutConfig {
@@ -39,6 +44,8 @@ impl Default for LayoutConfig {
             tick: Duration::from_millis(16),
             jit: true,
             name: "layout".into(),
+            alert_layer: true,
+            alerts_to_terminal: true,
         }
     }
 }

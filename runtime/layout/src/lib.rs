@@ -6,6 +6,8 @@
 //!   subscriptions, evaluated once per tick with early cutoff; outputs under `root.display`.
 //! - `watch`: watches on delayed calls (hold, hysteresis, repeat, snooze).
 //! - `actions`: set / call / swap / show / hide / alert, with control feedback.
+//! - `alerts`: alerts and failed commands always reach the operator (world model, log,
+//!   terminal, and a built-in alert window unless the layout places an `AlertLayer`).
 //! - [`events`]: the trial's event log.
 //!
 //! Architecture invariant: a layout talks to the rest of the OCU only through the
@@ -13,6 +15,7 @@
 //! bindings as methods, watches, feedback and alerts under `root.operator`.
 
 mod actions;
+mod alerts;
 pub mod events;
 pub mod graph;
 pub use mocu_lower as lower;

@@ -127,6 +127,7 @@ impl Shared {
                             .map_err(lower)?;
                         list.push((actions::binding_key(bind), acts));
                     }
+                    list.extend(crate::alerts::builtin_bindings(program));
                     Compiled::Bindings(list)
                 }
             };
@@ -256,6 +257,7 @@ impl Shared {
             st.items.push(rec);
         }
         crate::menu::publish_menus(self, st, program);
+        crate::alerts::ensure_layer(self, st, program);
         // Declaration order decides stacking among equal layers.
         for (i, w) in program.windows.iter().enumerate() {
             if let Some(g) = st.windows.get(&w.name) {

@@ -63,6 +63,9 @@ struct Shared {
     exec: Executor,
     config: RendererConfig,
     state: Mutex<State>,
+    /// Alert layers to repaint when an alert comes, goes or is acknowledged, and the
+    /// watches that tell (apart from `state`: ended with no lock held).
+    alert_layers: Mutex<(Vec<(Guid, Guid)>, Vec<mocu_dataserver::PathWatch>)>,
 }
 
 #[derive(Default)]
@@ -114,6 +117,7 @@ impl WidgetRenderer {
             exec: ds.serial_executor(),
             config,
             state: Mutex::default(),
+            alert_layers: Mutex::default(),
         });
         let weak = Arc::downgrade(&shared);
         let sub = ds
@@ -141,6 +145,8 @@ impl WidgetRenderer {
 
 impl Drop for WidgetRenderer {
     fn drop(&mut self) {
+        let alert_watches = std::mem::take(&mut self.shared.alert_layers.lock().1);
+        drop(alert_watches);
         let subs: Vec<SubscriptionId> = {
             let mut st = self.shared.state.lock();
             st.closed = true;
@@ -267,6 +273,12 @@ impl Shared {
         {
             self.watch_vehicles(window, w);
         }
+        if name.as_str() == "component"
+            && self.ds.try_get(w, PropName::new("component")).as_ref().and_then(Value::as_str)
+                == Some(crate::alerts::COMPONENT)
+        {
+            self.watch_alerts(window, w);
+        }
         // Repaint the old and the new place (a moved widget), with room for the overlays.
         self.damage(window, old);
         self.damage(window, bounds);
@@ -336,6 +348,47 @@ impl Shared {
         match self.lib.lock().components.get(component) {
             Some(c) => c.data.clone(),
             None => Vec::new(),
+        }
+    }
+
+    /// Repaints alert layer `w` whenever an alert is raised or acknowledged, and when a
+    /// shown alert's time is up.
+    fn watch_alerts(self: &Arc<Self>, window: Guid, w: Guid) {
+        let start = {
+            let mut al = self.alert_layers.lock();
+            if al.0.iter().any(|(_, x)| *x == w) {
+                return;
+            }
+            al.0.push((window, w));
+            al.1.is_empty()
+        };
+        if !start {
+            return;
+        }
+        let mut watches = Vec::new();
+        for prop in ["raised", "unacknowledged"] {
+            let weak = Arc::downgrade(self);
+            let path = mocu_dataserver::DottedPath::new(&["operator", "alerts"], prop);
+            let watch = self.ds.watch_path(path, Some(&self.exec), move |_| {
+                let Some(sh) = weak.upgrade() else { return };
+                sh.repaint_alert_layers();
+                let weak = Arc::downgrade(&sh);
+                let after = crate::alerts::SHOW_FOR + Duration::from_millis(50);
+                sh.ds.run_after(after, Some(&sh.exec), move || {
+                    if let Some(sh) = weak.upgrade() {
+                        sh.repaint_alert_layers();
+                    }
+                });
+            });
+            watches.extend(watch.ok());
+        }
+        self.alert_layers.lock().1.extend(watches);
+    }
+
+    fn repaint_alert_layers(&self) {
+        let layers = self.alert_layers.lock().0.clone();
+        for (window, w) in layers {
+            self.damage(window, widget_bounds(&self.ds, w));
         }
     }
 
@@ -440,6 +493,9 @@ impl Shared {
             self.context_menu(window, p);
             return;
         }
+        if (kind, button) == ("down", 0) && self.alert_press(window, p) {
+            return;
+        }
         let under = self.widget_at(window, p);
         let mut changed = Vec::new();
         let press_target = {
@@ -540,6 +596,17 @@ impl Shared {
             ds.try_get(window, PropName::new(k)).and_then(|v| v.as_f64()).unwrap_or(0.0) as f32
         };
         crate::menu::open(ds, object, Point::new(n("x") + p.x, n("y") + p.y));
+    }
+
+    /// A press on an alert layer of `window`: acknowledges what it hit.
+    fn alert_press(&self, window: Guid, p: Point) -> bool {
+        let layers = self.alert_layers.lock().0.clone();
+        layers.into_iter().filter(|(win, _)| *win == window).any(|(_, w)| {
+            widget_bounds(&self.ds, w).is_some_and(|b| {
+                let local = Point::new(p.x - b.x, p.y - b.y);
+                crate::alerts::press(&self.ds, Rect::new(0.0, 0.0, b.w, b.h), local)
+            })
+        })
     }
 
     /// The topmost pressable widget under a window-local point.
@@ -711,6 +778,10 @@ fn draw_native(
     let b = bounds.unwrap_or(Rect::new(0.0, 0.0, 160.0, 40.0));
     if component == "ContextMenu" {
         context_menu(c, props, b);
+        return;
+    }
+    if component == crate::alerts::COMPONENT {
+        crate::alerts::draw(c, ds, Rect::new(0.0, 0.0, b.w, b.h));
         return;
     }
     c.fill_rounded_rect(Rect::new(0.0, 0.0, b.w, b.h), 4.0, &Brush::Solid(theme::PANEL));

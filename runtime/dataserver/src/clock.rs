@@ -1,0 +1,99 @@
+//! Where the DataServer reads the time: the system clock, or a manual clock that tests move
+//! forward. Timers, delayed calls, call timeouts and `received_at` all read the server's
+//! clock, so a test that advances a [`ManualClock`] controls every one of them and never
+//! sleeps.
+
+use parking_lot::Mutex;
+use std::sync::{Arc, Weak};
+use std::time::{Duration, Instant};
+
+/// A source of time for a DataServer. Times are `std::time::Instant`s, so they mix with the
+/// display's and the input engine's times.
+pub trait Clock: Send + Sync + 'static {
+    /// The current time.
+    fn now(&self) -> Instant;
+
+    /// Called once by each DataServer built on this clock. A clock that moves only when
+    /// told (a manual clock) keeps `fire` and calls it after every move, and returns true;
+    /// the system clock ignores it and returns false (its timers wait on real time).
+    fn on_advance(&self, fire: Weak<dyn Fn() + Send + Sync>) -> bool {
+        let _ = fire;
+        false
+    }
+}
+
+/// The real, monotonic clock (the default).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SystemClock;
+
+impl Clock for SystemClock {
+    fn now(&self) -> Instant {
+        Instant::now()
+    }
+}
+
+/// A clock that stands still until [`ManualClock::advance`] moves it. Advancing fires every
+/// timer, delayed call and timeout that falls due, before `advance` returns: their jobs are
+/// queued (timeouts answered) by then, and `DataServer::quiesce` waits for the jobs to run.
+/// Cheap to clone; clones are the same clock.
+#[derive(Clone)]
+pub struct ManualClock {
+    inner: Arc<ManualInner>,
+}
+
+struct ManualInner {
+    now: Mutex<Instant>,
+    fire: Mutex<Vec<Weak<dyn Fn() + Send + Sync>>>,
+}
+
+impl Default for ManualClock {
+    fn default() -> Self {
+        ManualClock::new()
+    }
+}
+
+impl std::fmt::Debug for ManualClock {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ManualClock").field("now", &*self.inner.now.lock()).finish()
+    }
+}
+
+impl ManualClock {
+    /// A manual clock reading the real time of its creation.
+    pub fn new() -> ManualClock {
+        ManualClock {
+            inner: Arc::new(ManualInner {
+                now: Mutex::new(Instant::now()),
+                fire: Mutex::default(),
+            }),
+        }
+    }
+
+    /// Moves the clock forward by `d` (saturating: a huge `d` moves it as far as an
+    /// `Instant` goes) and fires what fell due.
+    pub fn advance(&self, d: Duration) {
+        {
+            let mut now = self.inner.now.lock();
+            *now = crate::timer::saturating_add(*now, d).unwrap_or(*now);
+        }
+        let fire: Vec<_> = {
+            let mut fs = self.inner.fire.lock();
+            fs.retain(|f| f.strong_count() > 0);
+            fs.iter().filter_map(Weak::upgrade).collect()
+        };
+        for f in fire {
+            f();
+        }
+    }
+}
+
+impl Clock for ManualClock {
+    fn now(&self) -> Instant {
+        *self.inner.now.lock()
+    }
+
+    fn on_advance(&self, fire: Weak<dyn Fn() + Send + Sync>) -> bool {
+        self.inner.fire.lock().push(fire);
+        true
+    }
+}

@@ -1,0 +1,127 @@
+//! Time under control: a DataServer on a `ManualClock` fires timers, delayed calls and
+//! timeouts exactly when the clock is advanced past them, and stamps every write with the
+//! clock's time (`received_at`).
+use mocu_dataserver::*;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
+
+fn manual() -> (DataServer, ManualClock) {
+    let clock = ManualClock::new();
+    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
+}
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+#[test]
+fn run_after_fires_when_the_manual_clock_passes_its_deadline_and_not_before() {
+    let (ds, clock) = manual();
+    let fired = Arc::new(AtomicUsize::new(0));
+    let f = fired.clone();
+    ds.run_after(ms(100), None, move || {
+        f.fetch_add(1, Ordering::SeqCst);
+    });
+    clock.advance(ms(99));
+    ds.quiesce();
+    assert_eq!(fired.load(Ordering::SeqCst), 0);
+    assert_eq!(ds.pending_timers(), 1);
+    clock.advance(ms(1));
+    ds.quiesce();
+    assert_eq!(fired.load(Ordering::SeqCst), 1);
+    assert_eq!(ds.pending_timers(), 0);
+}
+
+#[test]
+fn timers_fire_in_deadline_order_whatever_order_they_were_set_in() {
+    let (ds, clock) = manual();
+    let order = Arc::new(parking_lot::Mutex::new(Vec::new()));
+    let ex = ds.serial_executor();
+    for d in [30u64, 10, 20] {
+        let o = order.clone();
+        ds.run_after(ms(d), Some(&ex), move || o.lock().push(d));
+    }
+    clock.advance(ms(30));
+    ds.quiesce();
+    assert_eq!(*order.lock(), vec![10, 20, 30]);
+}
+
+#[test]
+fn a_call_times_out_exactly_when_the_clock_passes_its_timeout() {
+    let (ds, clock) = manual();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("v", "v")).unwrap();
+    // A handler that keeps its responder and never answers.
+    let kept = Arc::new(parking_lot::Mutex::new(Vec::new()));
+    let k = kept.clone();
+    ds.publish_method(o, MethodSpec::new("slow"), move |call| k.lock().push(call.responder))
+        .unwrap();
+    let (tx, rx) = crossbeam_channel::unbounded();
+    ds.call(o, "slow", vec![], Some(CallOptions::queued().timeout(ms(50))), move |out| {
+        tx.send(out).unwrap();
+    });
+    clock.advance(ms(49));
+    ds.quiesce();
+    assert!(rx.try_recv().is_err(), "not answered before the timeout");
+    clock.advance(ms(1));
+    // `advance` answers TimedOut itself before it returns.
+    assert_eq!(rx.try_recv(), Ok(CallOutcome::TimedOut));
+    assert!(!kept.lock().pop().unwrap().accept(vec![]), "a late answer is refused");
+}
+
+#[test]
+fn every_write_stamps_received_at_with_the_server_clock_even_an_unchanged_one() {
+    let (ds, clock) = manual();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("v", "v")).unwrap();
+    let t0 = ds.now();
+    ds.set(o, "speed", Value::Float(1.0)).unwrap();
+    assert_eq!(ds.received_at(o, "speed"), Ok(Some(t0)));
+    let (log, cb) = {
+        let log = Arc::new(AtomicUsize::new(0));
+        let l = log.clone();
+        (log, move |_: &Notification| {
+            l.fetch_add(1, Ordering::SeqCst);
+        })
+    };
+    ds.subscribe(Topic::properties(o), cb).unwrap();
+    ds.quiesce();
+    clock.advance(ms(250));
+    ds.set(o, "speed", Value::Float(1.0)).unwrap(); // equal: no notification
+    ds.update(o, "speed", Value::Float(1.0)).unwrap();
+    ds.quiesce();
+    assert_eq!(log.load(Ordering::SeqCst), 1, "only the initial New");
+    assert_eq!(ds.received_at(o, "speed"), Ok(Some(t0 + ms(250))));
+    let typed = PropMeta::typed(ValueKind::Int);
+    ds.create_property(o, "mode", Value::Int(1), typed).unwrap();
+    assert_eq!(ds.received_at(o, "mode"), Ok(Some(t0 + ms(250))));
+}
+
+#[test]
+fn a_refused_write_does_not_count_as_received() {
+    let (ds, clock) = manual();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("v", "v")).unwrap();
+    let t0 = ds.now();
+    ds.create_property(o, "pct", Value::Float(5.0), PropMeta::default().range(0.0, 10.0)).unwrap();
+    clock.advance(ms(10));
+    assert!(ds.set(o, "pct", Value::Float(50.0)).is_err());
+    assert_eq!(ds.received_at(o, "pct"), Ok(Some(t0)));
+}
+
+#[test]
+fn received_at_tells_an_absent_property_from_an_absent_object() {
+    let (ds, _clock) = manual();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("v", "v")).unwrap();
+    assert_eq!(ds.received_at(o, "nothing"), Ok(None));
+    ds.delete_object(o).unwrap();
+    assert!(matches!(ds.received_at(o, "nothing"), Err(DsError::NoSuchObject { .. })));
+}
+
+#[test]
+fn the_system_clock_is_the_default_and_received_at_follows_it() {
+    let ds = DataServer::default();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("v", "v")).unwrap();
+    let before = ds.now();
+    ds.set(o, "x", Value::Int(1)).unwrap();
+    let at = ds.received_at(o, "x").unwrap().unwrap();
+    assert!(at >= before && at <= ds.now());
+}
