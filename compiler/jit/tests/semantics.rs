@@ -102,7 +102,7 @@ fn string_inputs_compare_by_content() {
     let f = Function { inputs: vec![Ty::Str], outputs: vec![e] };
     for ev in [
         Box::new(compile(std::slice::from_ref(&f)).unwrap()) as Box<dyn Evaluate>,
-        Box::new(Interpreter::new(&[f.clone()]).unwrap()),
+        Box::new(Interpreter::new(std::slice::from_ref(&f)).unwrap()),
     ] {
         let mut ctx = ev.context();
         let s2 = Slot::str(&mut ctx, Arc::from("usv"));
@@ -155,7 +155,7 @@ fn ill_typed_ir_is_refused_before_code_generation() {
         inputs: vec![],
         outputs: vec![Expr::Arith(Arith::Add, b(Expr::Bool(true)), b(num(1.0)))],
     };
-    assert!(matches!(compile(&[bad.clone()]), Err(JitError::Ir(_))));
+    assert!(matches!(compile(std::slice::from_ref(&bad)), Err(JitError::Ir(_))));
     assert!(Interpreter::new(&[bad]).is_err());
 }
 
