@@ -52,3 +52,8 @@ impl SourceLoader for FsLoader {
         std::fs::read_to_string(path).map_err(|e| e.to_string())
     }
 }
+
+/// The bytes of a file `mocu run` was given (a built bundle, a profile or a layout).
+pub fn read_bytes(path: &Path) -> std::io::Result<Vec<u8>> {
+    std::fs::read(path)
+}

@@ -260,7 +260,7 @@ impl std::fmt::Display for LoadError {
 /// What `mocu run TARGET` loads: a built bundle (by its header), a profile `.toml` or a
 /// layout. Sources are checked; errors refuse the load, warnings are returned rendered.
 pub fn load_target(path: &std::path::Path) -> Result<(Bundle, String), LoadError> {
-    let bytes = std::fs::read(path)
+    let bytes = fs::read_bytes(path)
         .map_err(|e| LoadError::Io(format!("cannot read {}: {e}", path.display())))?;
     if bundle::is_bundle(&bytes) {
         return bundle::read(&bytes).map(|b| (b, String::new())).map_err(LoadError::Bundle);

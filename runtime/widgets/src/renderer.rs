@@ -65,7 +65,14 @@ struct Shared {
     state: Mutex<State>,
     /// Alert layers to repaint when an alert comes, goes or is acknowledged, and the
     /// watches that tell (apart from `state`: ended with no lock held).
-    alert_layers: Mutex<(Vec<(Guid, Guid)>, Vec<mocu_dataserver::PathWatch>)>,
+    alert_layers: Mutex<AlertFollow>,
+}
+
+/// The alert layers a renderer draws and the watches on `root.operator.alerts`.
+#[derive(Default)]
+struct AlertFollow {
+    layers: Vec<(Guid, Guid)>,
+    watches: Vec<mocu_dataserver::PathWatch>,
 }
 
 #[derive(Default)]
@@ -145,7 +152,7 @@ impl WidgetRenderer {
 
 impl Drop for WidgetRenderer {
     fn drop(&mut self) {
-        let alert_watches = std::mem::take(&mut self.shared.alert_layers.lock().1);
+        let alert_watches = std::mem::take(&mut self.shared.alert_layers.lock().watches);
         drop(alert_watches);
         let subs: Vec<SubscriptionId> = {
             let mut st = self.shared.state.lock();
@@ -356,11 +363,11 @@ impl Shared {
     fn watch_alerts(self: &Arc<Self>, window: Guid, w: Guid) {
         let start = {
             let mut al = self.alert_layers.lock();
-            if al.0.iter().any(|(_, x)| *x == w) {
+            if al.layers.iter().any(|(_, x)| *x == w) {
                 return;
             }
-            al.0.push((window, w));
-            al.1.is_empty()
+            al.layers.push((window, w));
+            al.watches.is_empty()
         };
         if !start {
             return;
@@ -382,11 +389,11 @@ impl Shared {
             });
             watches.extend(watch.ok());
         }
-        self.alert_layers.lock().1.extend(watches);
+        self.alert_layers.lock().watches.extend(watches);
     }
 
     fn repaint_alert_layers(&self) {
-        let layers = self.alert_layers.lock().0.clone();
+        let layers = self.alert_layers.lock().layers.clone();
         for (window, w) in layers {
             self.damage(window, widget_bounds(&self.ds, w));
         }
@@ -600,7 +607,7 @@ impl Shared {
 
     /// A press on an alert layer of `window`: acknowledges what it hit.
     fn alert_press(&self, window: Guid, p: Point) -> bool {
-        let layers = self.alert_layers.lock().0.clone();
+        let layers = self.alert_layers.lock().layers.clone();
         layers.into_iter().filter(|(win, _)| *win == window).any(|(_, w)| {
             widget_bounds(&self.ds, w).is_some_and(|b| {
                 let local = Point::new(p.x - b.x, p.y - b.y);
