@@ -625,10 +625,13 @@ impl Canvas for SkiaCanvas {
     }
 
     fn clip_rect(&mut self, r: Rect) {
-        let d = self.device().map_rect(r);
+        // Rounded in window pixels, then moved to the pixmap's: a damage repaint (whose
+        // pixmap starts anywhere) clips where a full repaint does.
+        let d = self.state.transform.map_rect(r);
         let x0 = d.x.round() as i32;
         let y0 = d.y.round() as i32;
-        let c = IRect::new(x0, y0, d.right().round() as i32 - x0, d.bottom().round() as i32 - y0);
+        let c = IRect::new(x0, y0, d.right().round() as i32 - x0, d.bottom().round() as i32 - y0)
+            .offset(-self.origin.0, -self.origin.1);
         self.state.clip = self.state.clip.intersect(&c);
     }
 
@@ -735,8 +738,12 @@ impl Canvas for SkiaCanvas {
             return metrics;
         }
         if uniform {
-            let o = dev.apply(Point::new(user_box.x, user_box.y));
-            self.blit_text(&run, o.x.round() as i32, o.y.round() as i32, style.color);
+            // Snapped to whole window pixels before moving to the pixmap's: rounding a
+            // half pixel after the move went the other way in a damage repaint whose
+            // pixmap starts below the text's top, shifting the text by one pixel there.
+            let o = self.state.transform.apply(Point::new(user_box.x, user_box.y));
+            let (ox, oy) = (o.x.round() as i32 - self.origin.0, o.y.round() as i32 - self.origin.1);
+            self.blit_text(&run, ox, oy, style.color);
         } else {
             // Rotated or skewed: rasterise the run upright, then draw it transformed.
             let (pw, ph) =
