@@ -298,7 +298,10 @@ pub enum LitUnit {
 
 #[derive(Clone, Debug)]
 pub enum ExprKind {
-    Number { value: f64, unit: Option<LitUnit> },
+    Number {
+        value: f64,
+        unit: Option<LitUnit>,
+    },
     Str(Vec<StrPart>),
     Colour(u32),
     Bool(bool),
@@ -310,6 +313,9 @@ pub enum ExprKind {
     Unary(UnOp, Box<Expr>),
     Binary(BinOp, Box<Expr>, Box<Expr>),
     If(Box<Expr>, Box<Expr>, Box<Expr>),
+    /// An expression that did not parse (already reported): typed as an error, silently,
+    /// so that a broken `let` still defines its name without follow-on errors.
+    Error,
 }
 
 #[derive(Clone, Debug)]

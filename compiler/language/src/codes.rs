@@ -4,6 +4,10 @@
 pub const SYNTAX: &str = "E0101";
 pub const STRAY_TEXT: &str = "E0102";
 pub const UNCLOSED: &str = "E0103";
+pub const UNCLOSED_TEXT: &str = "E0104";
+pub const CONFUSABLE: &str = "E0105";
+pub const TOO_DEEP: &str = "E0106";
+pub const NOT_UTF8: &str = "E0107";
 
 pub const FILE_NOT_FOUND: &str = "E0201";
 pub const USE_CYCLE: &str = "E0202";
@@ -43,6 +47,10 @@ pub const ALL: &[(&str, &str)] = &[
     (SYNTAX, "syntax error"),
     (STRAY_TEXT, "text outside any item"),
     (UNCLOSED, "unclosed brace"),
+    (UNCLOSED_TEXT, "unclosed string, interpolation or block comment"),
+    (CONFUSABLE, "look-alike character or single quote"),
+    (TOO_DEEP, "nesting too deep"),
+    (NOT_UTF8, "file is not UTF-8"),
     (FILE_NOT_FOUND, "file not found"),
     (USE_CYCLE, "`use` cycle"),
     (DUPLICATE, "duplicate definition"),

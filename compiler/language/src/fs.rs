@@ -48,8 +48,14 @@ impl SourceLoader for FsLoader {
         Self::exists(&p).then_some(p)
     }
 
+    /// Bytes in: text that is not UTF-8 is refused with the line and column of the first bad
+    /// byte.
     fn read(&self, path: &str) -> Result<String, String> {
-        std::fs::read_to_string(path).map_err(|e| e.to_string())
+        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        String::from_utf8(bytes).map_err(|e| {
+            crate::lexer::describe_bad_utf8(e.as_bytes())
+                .unwrap_or_else(|| "not UTF-8 text".to_string())
+        })
     }
 }
 

@@ -18,6 +18,7 @@ pub mod bundle;
 pub mod codes;
 pub mod diagnostics;
 pub mod fs;
+pub mod lexer;
 pub mod parser;
 pub mod passes;
 pub mod profile;

@@ -24,8 +24,14 @@ pub const ITEM_KEYWORDS: &[&str] =
 
 /// Parses one file. Syntax errors go to `diags`; the tree holds every item that parsed.
 pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
+    // Lexical problems are reported once, at their start; the items they touch are skipped.
+    let scan = crate::lexer::scan(file, text, diags);
     let mut items = Vec::new();
     for chunk in split_items(text) {
+        if scan.is_broken(chunk.start..chunk.end) {
+            items.extend(broken_let(file, text, &chunk));
+            continue;
+        }
         match chunk.kind {
             ChunkKind::Stray => {
                 let word = first_word(&text[chunk.start..chunk.end]);
@@ -60,19 +66,48 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
                             match ctx.too_deep.get() {
                                 None => items.push(item),
                                 Some(span) => {
+                                    items.extend(broken_let(file, text, &chunk));
                                     diags
-                                        .error(codes::SYNTAX, span, "this expression is nested too deeply")
-                                        .help(format!("split it with `let`s: at most {MAX_DEPTH} levels and {MAX_OPERATORS} operators in a row"));
+                                        .error(codes::TOO_DEEP, span, format!("this expression is nested deeper than {MAX_DEPTH} levels"))
+                                        .label("too deep")
+                                        .help("split it with `let`s");
                                 }
                             }
                         }
                     }
-                    Err(e) => report_pest_error(file, chunk.start, src, &e, diags),
+                    Err(e) => {
+                        report_pest_error(file, chunk.start, src, &e, diags);
+                        items.extend(broken_let(file, text, &chunk));
+                    }
                 }
             }
         }
     }
     File { items }
+}
+
+/// A `let NAME` item whose value did not parse (already reported) still defines `NAME`, with
+/// an error value, so that its uses do not report it unknown.
+fn broken_let(file: FileId, text: &str, chunk: &Chunk) -> Option<Item> {
+    let src = &text[chunk.start..chunk.end];
+    let rest = src.strip_prefix("let")?;
+    let trimmed = rest.trim_start();
+    if trimmed.len() == rest.len() {
+        return None;
+    }
+    let name_at = chunk.start + 3 + (rest.len() - trimmed.len());
+    let len =
+        trimmed.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(trimmed.len());
+    let name = &trimmed[..len];
+    if name.is_empty() || name.starts_with(|c: char| c.is_ascii_digit()) {
+        return None;
+    }
+    let span = Span::new(file, chunk.start, chunk.end);
+    Some(Item::Let(Let {
+        name: Ident { name: name.to_string(), span: Span::new(file, name_at, name_at + len) },
+        value: Expr { kind: ExprKind::Error, span },
+        span,
+    }))
 }
 
 fn first_word(s: &str) -> &str {
@@ -112,7 +147,8 @@ pub fn split_items(text: &str) -> Vec<Chunk> {
     let mut depth_stack: Vec<usize> = Vec::new();
     let mut stray_start: Option<usize> = None;
     let mut stray: Vec<(usize, usize)> = Vec::new();
-    let mut i = 0;
+    // A UTF-8 byte order mark is not text.
+    let mut i = if text.starts_with('\u{FEFF}') { 3 } else { 0 };
     let mut line_start = true;
     while i < bytes.len() {
         let b = bytes[i];
@@ -407,10 +443,10 @@ struct Ctx {
     too_deep: std::cell::Cell<Option<Span>>,
 }
 
-/// Expressions nested deeper than this, or with more operators than [`MAX_OPERATORS`] in a row,
-/// are refused (E0101) instead of risking the stack in the later, recursive passes.
-const MAX_DEPTH: usize = 64;
-const MAX_OPERATORS: usize = 256;
+/// The deepest expression tree accepted (E0106): every operator, prefix, field, index, call
+/// and bracket counts one level. Deeper ones are refused instead of risking the stack in the
+/// later, recursive passes; the lexer ([`crate::lexer`]) already refused deep brackets.
+const MAX_DEPTH: usize = 256;
 
 impl Ctx {
     fn span(&self, p: &Pair<Rule>) -> Span {
@@ -808,16 +844,26 @@ impl Ctx {
         let span = self.span(&p);
         let inner = p.into_inner();
         let depth = self.depth.get();
-        if depth >= MAX_DEPTH || inner.len() > 2 * MAX_OPERATORS {
-            if self.too_deep.get().is_none() {
-                self.too_deep.set(Some(span));
-            }
+        // Operators and prefixes: each one level of the tree this builds.
+        let cost = 1 + inner.clone().filter(|q| q.as_rule() != Rule::term).count();
+        if self.refuse_deeper(depth + cost, span) {
             return Expr { kind: ExprKind::Bool(false), span };
         }
-        self.depth.set(depth + 1);
+        self.depth.set(depth + cost);
         let e = self.expr_pairs(inner);
         self.depth.set(depth);
         e
+    }
+
+    /// True (and the first such place remembered) when `depth` passes [`MAX_DEPTH`].
+    fn refuse_deeper(&self, depth: usize, span: Span) -> bool {
+        if depth <= MAX_DEPTH && self.too_deep.get().is_none() {
+            return false;
+        }
+        if self.too_deep.get().is_none() {
+            self.too_deep.set(Some(Span { end: span.start + 1, ..span }));
+        }
+        true
     }
 
     fn expr_pairs(&self, pairs: Pairs<Rule>) -> Expr {
@@ -853,7 +899,21 @@ impl Ctx {
 
     /// A primary and its postfixes (field, index, call).
     fn term(&self, p: Pair<Rule>) -> Expr {
+        let span = self.span(&p);
         let mut it = p.into_inner();
+        // Each postfix (`.a`, `["x"]`, `()`) is one level around the primary.
+        let depth = self.depth.get();
+        let postfixes = it.len().saturating_sub(1);
+        if self.refuse_deeper(depth + postfixes, span) {
+            return Expr { kind: ExprKind::Bool(false), span };
+        }
+        self.depth.set(depth + postfixes);
+        let e = self.term_pairs(&mut it);
+        self.depth.set(depth);
+        e
+    }
+
+    fn term_pairs(&self, it: &mut Pairs<Rule>) -> Expr {
         let Some(first) = it.next() else {
             return Expr {
                 kind: ExprKind::Bool(false),

@@ -137,6 +137,58 @@ const TOKENS: &[&str] = &[
     "\"lib.mocu\"",
 ];
 
+/// Openers and closers (or postfixes, with no closer) repeated `n` times.
+const NESTERS: &[(&str, &str)] = &[
+    ("(", ")"),
+    ("[", "]"),
+    ("{", "}"),
+    ("-", ""),
+    ("not ", ""),
+    ("if true then ", " else 0"),
+    ("", ".a"),
+    ("", "[\"x\"]"),
+    ("", "()"),
+    ("", " + 1"),
+    ("\"{", "}\""),
+    ("f(", ")"),
+    ("/*", ""),
+    ("\"", ""),
+];
+
+/// Every layout, stdlib file and syntax test: the seeds of the mutation test.
+fn corpus() -> &'static [String] {
+    static CORPUS: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
+    CORPUS.get_or_init(|| {
+        let mut out = Vec::new();
+        for dir in ["../../layouts", "../../stdlib", "tests/syntax"] {
+            walk(std::path::Path::new(dir), &mut out);
+        }
+        assert!(out.len() > 20, "the fuzz corpus is missing");
+        out
+    })
+}
+
+fn walk(dir: &std::path::Path, out: &mut Vec<String>) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    let mut paths: Vec<_> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    for p in paths {
+        if p.is_dir() {
+            walk(&p, out);
+        } else if p.extension().is_some_and(|e| e == "mocu") {
+            let bytes = std::fs::read(&p).unwrap_or_default();
+            out.push(String::from_utf8_lossy(&bytes).into_owned());
+        }
+    }
+}
+
+fn floor_boundary(s: &str, mut at: usize) -> usize {
+    while !s.is_char_boundary(at) {
+        at -= 1;
+    }
+    at
+}
+
 fn check(text: &str) {
     let loader = MemoryLoader::new()
         .with("lib.mocu", "use \"main.mocu\"\ncomponent Dial(value: number?, range: range = 0 .. 1) { circle 0 0 w }\nlet x = 1")
@@ -168,6 +220,40 @@ proptest! {
         check(&tokens.join(" "));
     }
 
+}
+
+proptest! {
+    // Whole files per case: fewer cases keep CI fast.
+    #![proptest_config(ProptestConfig { cases: 300, failure_persistence: None, ..ProptestConfig::default() })]
+
+    #[test]
+    fn checker_never_panics_on_deep_nesting_or_long_chains(
+        kind in 0usize..NESTERS.len(),
+        n in 1usize..9000,
+        tail in proptest::collection::vec(proptest::sample::select(TOKENS), 0..6),
+    ) {
+        let (open, close) = NESTERS[kind];
+        check(&format!("let x = {}1{}{}\nwindow w {{ layer x }}", open.repeat(n), close.repeat(n), tail.join(" ")));
+    }
+
+    #[test]
+    fn checker_never_panics_on_a_mutated_source_file(
+        file in 0usize..corpus().len(),
+        cut in 0usize..100_000,
+        len in 0usize..40,
+        insert in proptest::sample::select(TOKENS),
+    ) {
+        let base = &corpus()[file];
+        let at = floor_boundary(base, cut % (base.len() + 1));
+        let end = floor_boundary(base, (at + len).min(base.len()));
+        // Delete a run of text and insert a token: unbalances brackets, strings and comments.
+        check(&format!("{}{}{}", &base[..at], insert, &base[end..]));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 2000, failure_persistence: None, ..ProptestConfig::default() })]
+
     #[test]
     fn checker_never_panics_on_a_mutated_layout(cut in 0usize..2000, insert in proptest::sample::select(TOKENS)) {
         let base = include_str!("../../../layouts/usv.mocu");
@@ -185,6 +271,12 @@ fn checker_refuses_deep_nesting_without_overflowing_the_stack() {
         format!("let x = {}1", "1 + ".repeat(20000)),
         format!("let x = {}1{}", "f(".repeat(2000), ")".repeat(2000)),
         format!("let x = \"{}\"", "{\"{".repeat(500)),
+        format!("let x = a{}", ".a".repeat(7000)),
+        format!("let x = a{}", "[\"x\"]".repeat(7000)),
+        format!("let x = f{}", "()".repeat(7000)),
+        format!("let x = {}1{}", "[".repeat(100_000), "]".repeat(100_000)),
+        format!("window w {{ layer {}", "{".repeat(100_000)),
+        format!("let x = {}", "/*".repeat(10_000)),
     ] {
         check(&text);
     }

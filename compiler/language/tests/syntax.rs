@@ -60,8 +60,10 @@ fn run_all(paths: &[String]) -> BTreeMap<String, Vec<(usize, usize, usize, Strin
         if covered.contains(p) {
             continue;
         }
-        let text = std::fs::read_to_string(p).unwrap_or_default();
-        mocu_language::check_path(p, text, &FsLoader, &mut sources, &mut diags);
+        let bytes = std::fs::read(p).unwrap_or_default();
+        if let Some(text) = mocu_language::lexer::decode(p, bytes, &mut sources, &mut diags) {
+            mocu_language::check_path(p, text, &FsLoader, &mut sources, &mut diags);
+        }
     }
     diags.sort();
     let mut out: BTreeMap<String, Vec<_>> = BTreeMap::new();
@@ -113,11 +115,14 @@ fn syntax_tests_report_exactly_the_expected_diagnostics() {
     let update = std::env::var("UPDATE_EXPECT").is_ok_and(|v| v == "1");
     let mut failures = Vec::new();
     for p in &paths {
-        let source = std::fs::read_to_string(p).expect("readable");
+        let bytes = std::fs::read(p).expect("readable");
+        let utf8 = std::str::from_utf8(&bytes).is_ok();
+        let source = String::from_utf8_lossy(&bytes).into_owned();
         let comment = if p.ends_with(".toml") { "#" } else { "//" };
         let want = expected_text(&source, comment, results.get(p).map_or(&[][..], |v| &v[..]));
         if want != source {
-            if update {
+            // A file that is not UTF-8 is never rewritten (its bad byte would be lost).
+            if update && utf8 {
                 std::fs::write(p, &want).expect("writable");
             } else {
                 failures
@@ -137,8 +142,10 @@ fn syntax_tests_report_exactly_the_expected_diagnostics() {
 fn every_code_has_a_syntax_test() {
     let mut paths = Vec::new();
     files(Path::new(ROOT), &mut paths);
-    let all: String =
-        paths.iter().map(|p| std::fs::read_to_string(p).unwrap_or_default()).collect();
+    let all: String = paths
+        .iter()
+        .map(|p| String::from_utf8_lossy(&std::fs::read(p).unwrap_or_default()).into_owned())
+        .collect();
     let missing: Vec<&str> =
         codes::ALL.iter().map(|(c, _)| *c).filter(|c| !all.contains(&format!("[{c}]"))).collect();
     assert!(missing.is_empty(), "codes without a syntax test: {missing:?}");

@@ -883,6 +883,7 @@ impl Typer<'_, '_> {
                 None => mk(Type::number(), Node::Number(*value), span),
             },
             ExprKind::Bool(b) => mk(Type::BOOL, Node::Bool(*b), span),
+            ExprKind::Error => mk(Type::ERROR, Node::Bool(false), span),
             ExprKind::Colour(c) => mk(Type::COLOUR, Node::Colour(*c), span),
             ExprKind::Str(parts) => self.string(parts, scope, span),
             ExprKind::SelfRef => match &scope.self_type {

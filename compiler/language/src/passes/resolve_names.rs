@@ -541,7 +541,8 @@ impl Resolver<'_, '_> {
                     }
                 }
             }
-            ExprKind::Number { .. } | ExprKind::Colour(_) | ExprKind::Bool(_) => {}
+            ExprKind::Number { .. } | ExprKind::Colour(_) | ExprKind::Bool(_) | ExprKind::Error => {
+            }
         }
     }
 }

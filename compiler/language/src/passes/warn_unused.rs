@@ -10,6 +10,11 @@ use crate::diagnostics::Diagnostics;
 
 pub fn warn_unused(modules: &Modules, used: &UsedLets, diags: &mut Diagnostics) {
     for module in modules {
+        // A use may sit in the item that did not parse: no guesses after a syntax error.
+        let broken = diags.iter().any(|d| d.span.file == module.file && d.code.starts_with("E01"));
+        if broken {
+            continue;
+        }
         let library = !module.ast.items.iter().any(|i| {
             matches!(
                 i,

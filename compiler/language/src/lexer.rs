@@ -1,0 +1,367 @@
+//! The lexical pass, run on a whole file before the parser. One linear byte scan reports, each
+//! once and at its start:
+//! - an unclosed string, string interpolation or block comment (E0104), at its opening;
+//! - a look-alike character (U+2212 minus, no-break space, smart quotes…) or a single quote
+//!   outside strings and comments (E0105), naming the character to type instead;
+//! - brackets nested deeper than [`MAX_NESTING`] (E0106), at the first opening past the limit.
+//!
+//! pest and the later passes recurse on nesting, so nothing deeper than the limit ever reaches
+//! them. The byte ranges it returns are broken: the parser skips the items that overlap them
+//! instead of reporting follow-on errors. A UTF-8 byte order mark is skipped.
+
+use crate::codes;
+use crate::diagnostics::Diagnostics;
+use crate::source::{FileId, SourceMap, Span};
+use std::ops::Range;
+
+/// Brackets (`(`, `[`, `{`, string interpolations) nested deeper than this are refused.
+pub const MAX_NESTING: usize = 128;
+
+/// Characters that look like a piece of syntax, and what to type instead.
+const CONFUSABLES: &[(char, &str, &str)] = &[
+    ('\u{2212}', "MINUS SIGN", "-"),
+    ('\u{2013}', "EN DASH", "-"),
+    ('\u{2014}', "EM DASH", "-"),
+    ('\u{2010}', "HYPHEN", "-"),
+    ('\u{00A0}', "NO-BREAK SPACE", " "),
+    ('\u{202F}', "NARROW NO-BREAK SPACE", " "),
+    ('\u{2009}', "THIN SPACE", " "),
+    ('\u{200B}', "ZERO WIDTH SPACE", ""),
+    ('\u{FEFF}', "ZERO WIDTH NO-BREAK SPACE", ""),
+    ('\u{201C}', "LEFT DOUBLE QUOTATION MARK", "\""),
+    ('\u{201D}', "RIGHT DOUBLE QUOTATION MARK", "\""),
+    ('\u{201E}', "DOUBLE LOW-9 QUOTATION MARK", "\""),
+    ('\u{00AB}', "LEFT-POINTING DOUBLE ANGLE QUOTATION MARK", "\""),
+    ('\u{00BB}', "RIGHT-POINTING DOUBLE ANGLE QUOTATION MARK", "\""),
+    ('\u{2018}', "LEFT SINGLE QUOTATION MARK", "\""),
+    ('\u{2019}', "RIGHT SINGLE QUOTATION MARK", "\""),
+    ('\u{00D7}', "MULTIPLICATION SIGN", "*"),
+    ('\u{00F7}', "DIVISION SIGN", "/"),
+    ('\u{2215}', "DIVISION SLASH", "/"),
+    ('\u{2264}', "LESS-THAN OR EQUAL TO", "<="),
+    ('\u{2265}', "GREATER-THAN OR EQUAL TO", ">="),
+    ('\u{2260}', "NOT EQUAL TO", "!="),
+    ('\u{2192}', "RIGHTWARDS ARROW", "->"),
+    ('\u{2026}', "HORIZONTAL ELLIPSIS", ".."),
+    ('\u{FF08}', "FULLWIDTH LEFT PARENTHESIS", "("),
+    ('\u{FF09}', "FULLWIDTH RIGHT PARENTHESIS", ")"),
+    ('\u{FF1A}', "FULLWIDTH COLON", ":"),
+    ('\u{FF0C}', "FULLWIDTH COMMA", ","),
+    ('\u{037E}', "GREEK QUESTION MARK", ";"),
+];
+
+/// What the scan found: the broken byte ranges (the parser skips items overlapping them).
+#[derive(Debug, Default)]
+pub struct Scan {
+    pub broken: Vec<Range<usize>>,
+}
+
+impl Scan {
+    pub fn is_broken(&self, range: Range<usize>) -> bool {
+        self.broken.iter().any(|b| b.start < range.end.max(range.start + 1) && range.start < b.end)
+    }
+}
+
+/// Where the scan is: in code, in a string, or in a string interpolation.
+#[derive(Clone, Copy, Debug)]
+enum Frame {
+    /// An open `(`, `[` or `{` in code.
+    Bracket,
+    /// A string opened at this offset.
+    Str(usize),
+    /// An interpolation `{` opened at this offset (inside a string).
+    Interp(usize),
+}
+
+/// Scans `text` (see the module comment). Never fails; reports into `diags`.
+pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
+    let bytes = text.as_bytes();
+    let mut out = Scan::default();
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut too_deep_reported = false;
+    let mut stray_brace: Option<usize> = None;
+    let mut i = if text.starts_with('\u{FEFF}') { 3 } else { 0 };
+    while i < bytes.len() {
+        let b = bytes[i];
+        let in_string = matches!(stack.last(), Some(Frame::Str(_)));
+        if in_string {
+            match b {
+                b'"' => {
+                    stack.pop();
+                    if let Some(at) = stray_brace.take() {
+                        diags
+                            .error(
+                                codes::SYNTAX,
+                                Span::new(file, at, at + 1),
+                                "a `}` in a string closes nothing",
+                            )
+                            .label("no `{` before it")
+                            .help("write `}}` for a literal `}` in a string");
+                        out.broken.push(at..at + 1);
+                    }
+                }
+                b'\\' => i += 1,
+                b'{' if bytes.get(i + 1) == Some(&b'{') => i += 1,
+                b'}' if bytes.get(i + 1) == Some(&b'}') => i += 1,
+                b'{' => {
+                    let refused =
+                        push(&mut stack, Frame::Interp(i), file, i, diags, &mut too_deep_reported);
+                    if refused {
+                        out.broken.push(i..line_end(bytes, i));
+                    }
+                }
+                // Reported when the string closes: an unclosed string explains it otherwise.
+                b'}' => stray_brace = stray_brace.or(Some(i)),
+                b'\n' => {
+                    stray_brace = None;
+                    report_unclosed_string(file, &stack, diags, &mut out, i);
+                    stack.retain(|f| matches!(f, Frame::Bracket));
+                }
+                _ => {}
+            }
+            i += 1;
+            continue;
+        }
+        match b {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                let start = i;
+                i += 2;
+                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                if i >= bytes.len() {
+                    diags
+                        .error(
+                            codes::UNCLOSED_TEXT,
+                            Span::new(file, start, start + 2),
+                            "this comment is never closed",
+                        )
+                        .label("unclosed comment")
+                        .help("end it with `*` then `/`: until then the rest of the file is a comment");
+                    out.broken.push(start..bytes.len());
+                }
+                i += 2;
+                continue;
+            }
+            b'"' => {
+                let refused =
+                    push(&mut stack, Frame::Str(i), file, i, diags, &mut too_deep_reported);
+                if refused {
+                    out.broken.push(i..line_end(bytes, i));
+                }
+            }
+            b'(' | b'[' | b'{' => {
+                let refused =
+                    push(&mut stack, Frame::Bracket, file, i, diags, &mut too_deep_reported);
+                if refused {
+                    // Skipped whole: the stack stays balanced.
+                    let end = closing(bytes, i);
+                    out.broken.push(i..end);
+                    i = end;
+                    continue;
+                }
+            }
+            b')' | b']' => {
+                if matches!(stack.last(), Some(Frame::Bracket)) {
+                    stack.pop();
+                }
+            }
+            b'}' => match stack.last() {
+                Some(Frame::Bracket) => {
+                    stack.pop();
+                }
+                Some(Frame::Interp(_)) => {
+                    stack.pop();
+                }
+                _ => {}
+            },
+            b'\n' if stack.iter().any(|f| matches!(f, Frame::Interp(_))) => {
+                report_unclosed_string(file, &stack, diags, &mut out, i);
+                stack.retain(|f| matches!(f, Frame::Bracket));
+            }
+            b'\'' => {
+                diags
+                    .error(
+                        codes::CONFUSABLE,
+                        Span::new(file, i, i + 1),
+                        "strings are written in double quotes",
+                    )
+                    .label("single quote")
+                    .help("write \"…\" instead of '…'");
+                out.broken.push(i..i + 1);
+            }
+            _ if b >= 0x80 => {
+                let c = text[i..].chars().next().unwrap_or('\u{FFFD}');
+                if let Some((_, name, instead)) = CONFUSABLES.iter().find(|(x, _, _)| *x == c) {
+                    let help = if instead.is_empty() {
+                        "delete it: it is invisible and means nothing here".to_string()
+                    } else if *instead == " " {
+                        "replace it with an ordinary space".to_string()
+                    } else {
+                        format!("replace it with `{instead}`")
+                    };
+                    diags
+                        .error(
+                            codes::CONFUSABLE,
+                            Span::new(file, i, i + c.len_utf8()),
+                            format!(
+                                "`{c}` (U+{:04X} {name}) looks like `{}` but is not part of the language",
+                                c as u32,
+                                if instead.is_empty() { " " } else { instead }
+                            ),
+                        )
+                        .label("look-alike character")
+                        .help(help);
+                    out.broken.push(i..i + c.len_utf8());
+                }
+                i += c.len_utf8();
+                continue;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    report_unclosed_string(file, &stack, diags, &mut out, bytes.len());
+    out
+}
+
+/// Pushes a frame; past [`MAX_NESTING`] reports E0106 once and returns true (not pushed).
+fn push(
+    stack: &mut Vec<Frame>,
+    frame: Frame,
+    file: FileId,
+    at: usize,
+    diags: &mut Diagnostics,
+    reported: &mut bool,
+) -> bool {
+    if stack.len() < MAX_NESTING {
+        stack.push(frame);
+        return false;
+    }
+    if !*reported {
+        *reported = true;
+        diags
+            .error(
+                codes::TOO_DEEP,
+                Span::new(file, at, at + 1),
+                format!("nesting deeper than {MAX_NESTING} levels"),
+            )
+            .label("too deep")
+            .help("split the expression with `let`s");
+    }
+    true
+}
+
+/// Reports the string or interpolation left open at a line end (or the end of the file):
+/// the innermost open interpolation when there is one (its `}` is missing), else the string.
+fn report_unclosed_string(
+    file: FileId,
+    stack: &[Frame],
+    diags: &mut Diagnostics,
+    out: &mut Scan,
+    end: usize,
+) {
+    let interp = stack.iter().rev().find_map(|f| match f {
+        Frame::Interp(o) => Some(*o),
+        _ => None,
+    });
+    let string = stack.iter().find_map(|f| match f {
+        Frame::Str(o) => Some(*o),
+        _ => None,
+    });
+    let Some(first) = string else { return };
+    match interp {
+        Some(o) => {
+            diags
+                .error(
+                    codes::UNCLOSED_TEXT,
+                    Span::new(file, o, o + 1),
+                    "this `{` in a string is never closed",
+                )
+                .label("unclosed interpolation")
+                .help("close it with `}` before the string ends, or write `{{` for a literal `{`");
+        }
+        None => {
+            diags
+                .error(
+                    codes::UNCLOSED_TEXT,
+                    Span::new(file, first, first + 1),
+                    "this string is never closed",
+                )
+                .label("unclosed string")
+                .help("close it with `\"` on the same line: a string cannot span lines");
+        }
+    }
+    out.broken.push(first..end);
+}
+
+fn line_end(bytes: &[u8], from: usize) -> usize {
+    bytes[from..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| from + p)
+}
+
+/// The offset after the bracket matching the one at `open` (or the end of the file).
+fn closing(bytes: &[u8], open: usize) -> usize {
+    let mut depth = 0usize;
+    for (k, &b) in bytes.iter().enumerate().skip(open) {
+        match b {
+            b'(' | b'[' | b'{' => depth += 1,
+            b')' | b']' | b'}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return k + 1;
+                }
+            }
+            _ => {}
+        }
+    }
+    bytes.len()
+}
+
+/// Decodes a file's bytes. Text that is not UTF-8 is added to `sources` (lossily) and reported
+/// at the first bad byte (E0107), and `None` is returned: the file is not checked further.
+pub fn decode(
+    path: &str,
+    bytes: Vec<u8>,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) -> Option<String> {
+    match String::from_utf8(bytes) {
+        Ok(t) => Some(t),
+        Err(e) => {
+            let at = e.utf8_error().valid_up_to();
+            let bad = e.as_bytes()[at];
+            let valid = String::from_utf8_lossy(&e.as_bytes()[..at]).len();
+            let lossy = String::from_utf8_lossy(e.as_bytes()).into_owned();
+            let file = sources.add(path.to_string(), lossy);
+            diags
+                .error(
+                    codes::NOT_UTF8,
+                    Span::new(file, valid, valid + '\u{FFFD}'.len_utf8()),
+                    format!("byte 0x{bad:02X} is not UTF-8 text"),
+                )
+                .label("not UTF-8")
+                .help("save the file as UTF-8 (in most editors: \"Save with encoding\" → UTF-8)");
+            None
+        }
+    }
+}
+
+/// Where the first non-UTF-8 byte of `bytes` is, as "line L, column C", for loaders that
+/// report read errors as text.
+pub fn describe_bad_utf8(bytes: &[u8]) -> Option<String> {
+    let e = std::str::from_utf8(bytes).err()?;
+    let at = e.valid_up_to();
+    let before = String::from_utf8_lossy(&bytes[..at]);
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    Some(format!(
+        "line {line}, column {column}: byte 0x{:02X} is not UTF-8 text; save the file as UTF-8",
+        bytes[at]
+    ))
+}
