@@ -1,6 +1,8 @@
 //! Differential tests: random well-typed expressions give the same results under the JIT
 //! and the reference interpreter — absent propagation, division by zero, NaN and overflow
 //! included.
+
+#![forbid(unsafe_code)]
 use mocu_jit::*;
 use proptest::prelude::*;
 use std::sync::Arc;

@@ -1,4 +1,6 @@
 //! The IR's documented semantics, by example, on both backends.
+
+#![forbid(unsafe_code)]
 use mocu_jit::*;
 use std::sync::Arc;
 

@@ -10,7 +10,7 @@
 //! - [`load_target`]: what `mocu run` calls: a layout, profile or built bundle → a [`Bundle`]
 //!   or the rendered diagnostics.
 //! - [`bundle::write`] / [`bundle::read`].
-#![deny(unsafe_code)]
+#![forbid(unsafe_code)]
 
 pub mod ast;
 pub mod builtins;

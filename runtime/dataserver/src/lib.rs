@@ -9,6 +9,8 @@
 //! renderer, input devices or file watching. Writes run on the caller's thread;
 //! notification work runs on the DataServer's own workers.
 
+#![forbid(unsafe_code)]
+
 mod call;
 mod clock;
 mod error;

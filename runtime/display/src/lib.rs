@@ -10,6 +10,8 @@
 //! - Nothing is redrawn unless the world model says it changed: a quiet display does no
 //!   work (see [`FrameStats::drawn`]).
 
+#![forbid(unsafe_code)]
+
 mod anim;
 mod canvas;
 mod color;

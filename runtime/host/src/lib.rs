@@ -13,6 +13,8 @@
 //! Architecture invariant: modules talk to each other only through the DataServer. This
 //! crate hands out no module-to-module channel; the DataServer depends on none of this.
 
+#![forbid(unsafe_code)]
+
 mod context;
 mod host;
 mod spec;

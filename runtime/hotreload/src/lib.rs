@@ -15,6 +15,8 @@
 //! Architecture invariant: the world model's vehicles, goals and routes are never touched
 //! by a reload; only objects the layout published under `root.display` and `root.operator`.
 
+#![forbid(unsafe_code)]
+
 mod banner;
 mod reloader;
 mod watcher;

@@ -15,6 +15,8 @@
 //! `fire(value)` method; it knows nothing of the compiler, the layout runtime or the
 //! window. Another module can replace it by publishing the same objects.
 
+#![forbid(unsafe_code)]
+
 pub mod engine;
 pub mod event;
 mod gilrs_source;

@@ -14,6 +14,8 @@
 //! DataServer: it publishes windows and widgets under `root.display`, widget events and
 //! bindings as methods, watches, feedback and alerts under `root.operator`.
 
+#![forbid(unsafe_code)]
+
 mod actions;
 mod alerts;
 pub mod events;

@@ -10,6 +10,8 @@
 //! One blocking reader thread per socket (I/O at the module's edge); everything else runs
 //! on the module's serial executor. No async runtime.
 
+#![forbid(unsafe_code)]
+
 mod decode;
 mod link;
 mod modes;

@@ -10,6 +10,8 @@
 //! Architecture invariant: the simulator knows nothing of layouts or displays; it talks
 //! only through the DataServer, exactly as a protocol module would.
 
+#![forbid(unsafe_code)]
+
 mod camera;
 mod rng;
 mod sim;

@@ -3,6 +3,8 @@
 //! Architecture invariant: this crate knows nothing of threads, I/O, the compiler or the
 //! renderer. It only defines what a property *is*.
 
+#![forbid(unsafe_code)]
+
 mod guid;
 mod kind;
 mod name;

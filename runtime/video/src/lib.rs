@@ -31,6 +31,8 @@
 //! Architecture invariant: the receiver, the codecs and the painter talk only through the
 //! DataServer (listener objects and properties); none holds a handle on another.
 
+#![forbid(unsafe_code)]
+
 mod clock;
 pub mod codec;
 mod frame;

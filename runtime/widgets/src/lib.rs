@@ -4,6 +4,8 @@
 //! Architecture invariant: these modules read the display from the world model
 //! (`root.display`) and draw through `mocu_display::Canvas`; they never talk to a layout.
 
+#![forbid(unsafe_code)]
+
 pub mod alerts;
 pub mod component;
 pub mod draw;
