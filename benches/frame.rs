@@ -50,20 +50,8 @@ fn scene() -> Scene {
 /// This thread's CPU time (`CLOCK_THREAD_CPUTIME_ID`), in nanoseconds.
 struct ThreadCpu;
 
-#[allow(unsafe_code)]
 fn thread_cpu_ns() -> u64 {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
-    }
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: clock_gettime writes one timespec into the pointer it is given.
-    unsafe { clock_gettime(3, &mut ts) };
-    ts.sec as u64 * 1_000_000_000 + ts.nsec as u64
+    cpu_time::ThreadTime::now().as_duration().as_nanos() as u64
 }
 
 struct Nanos;

@@ -1,12 +1,17 @@
 //! `mocu`: the command-line OCU. The command-line contract (docs/language.md, end) is fixed:
 //! commands, flags, exit codes and output formats are relied on by scripts and CI.
 
+#![forbid(unsafe_code)]
+
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod build;
 mod check;
+mod frames;
+mod logger;
 mod run;
+mod stop;
 
 #[derive(Parser)]
 #[command(name = "mocu", version, about = "Multi-robot Operator Control Unit")]
@@ -26,6 +31,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    logger::init();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

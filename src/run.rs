@@ -1,23 +1,24 @@
 //! `mocu run`: the OCU itself. Checks the target (a layout, a profile or a bundle), starts
 //! the DataServer, the module host with the modules the profile names (or the defaults: the
 //! simulator, MAVLink and video), the display modules (window manager, widget renderer, map, video) and
-//! the layout, then runs frames at 60 Hz — in a window where there is a display, headless
-//! otherwise — until `--frames N` have passed or Ctrl-C, and prints `--dump PATH` as JSON
-//! on exit. Headless runs print a compact summary of the vehicles to stderr once a second;
-//! stdout carries only the `--dump` JSON.
+//! the layout, then runs frames — in a window where there is a display, headless
+//! otherwise — until `--frames N` have passed at 60 Hz, the window is closed, or SIGINT
+//! (Ctrl-C) or SIGTERM. A frame is drawn only when something changed: an idle run sleeps.
+//! On exit it writes `--screenshot`, prints `--dump PATH` as JSON (the display and the
+//! layout still live), then stops every module within a bounded time (`crate::stop`).
+//! Headless runs print a compact summary of the vehicles to stderr, at most once a second
+//! and only when it changed; stdout carries only the `--dump` JSON.
 
+use crate::frames::Pace;
 use mocu_dataserver::{DataServer, Guid, Value};
 use mocu_display::{BackendChoice, Display, DisplayOptions, WindowOptions, run_window};
 use mocu_host::{Events, HostEvent, Level, ModuleHost, ModuleSpec, Registry};
 use mocu_layout::{EventSink, JsonlLog, LayoutConfig, NullSink};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-
-/// The display rate: one frame every 1/60 s.
-const FRAME_RATE: f64 = 60.0;
 
 #[derive(clap::Args)]
 pub struct RunArgs {
@@ -173,27 +174,6 @@ pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
     specs
 }
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-
-#[cfg(unix)]
-#[allow(unsafe_code)]
-fn catch_ctrl_c() {
-    unsafe extern "C" {
-        fn signal(signum: i32, handler: extern "C" fn(i32)) -> usize;
-    }
-    extern "C" fn on_sigint(_: i32) {
-        INTERRUPTED.store(true, Ordering::SeqCst);
-    }
-    // SAFETY: `on_sigint` only stores to an atomic, which is async-signal-safe.
-    unsafe {
-        signal(2, on_sigint);
-        signal(15, on_sigint);
-    }
-}
-
-#[cfg(not(unix))]
-fn catch_ctrl_c() {}
-
 pub fn main(args: RunArgs) -> ExitCode {
     let target = match load_target(&args.target) {
         Ok(t) => t,
@@ -226,7 +206,7 @@ pub fn main(args: RunArgs) -> ExitCode {
         );
         return ExitCode::from(2);
     };
-    catch_ctrl_c();
+    let stop = crate::stop::on_signals();
     let screen = args.size.unwrap_or_else(|| match &target.bundle.profile {
         Some(p) => (p.screen[0].max(1.0) as u32, p.screen[1].max(1.0) as u32),
         None => (1920, 1080),
@@ -303,7 +283,7 @@ pub fn main(args: RunArgs) -> ExitCode {
         if windowed { "window" } else { "headless" }
     );
 
-    let mut code = ExitCode::SUCCESS;
+    let mut code: u8 = 0;
     let mut ran_window = false;
     if windowed {
         let opts = WindowOptions {
@@ -311,6 +291,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             display: DisplayOptions::new(screen.0, screen.1),
             frames: args.frames,
             screenshot: args.screenshot.clone(),
+            stop: Some(stop.window.clone()),
         };
         let ev = events.clone();
         let s2 = sink.clone();
@@ -334,14 +315,11 @@ pub fn main(args: RunArgs) -> ExitCode {
         }
     }
     if !ran_window {
-        code = run_headless(&ds, &args, screen, &events, &sink);
+        code = run_headless(&ds, &args, screen, &events, &sink, &stop);
     }
 
-    drop(layout);
-    drop(renderer);
-    drop(map);
-    drop(video);
-    host.stop_all();
+    // The outputs first, with the display and the layout still live (`--dump
+    // root.display` shows the display as it was), then the teardown, bounded.
     ds.quiesce();
     drain_events(&events, &sink);
     if let Some(path) = &args.dump {
@@ -349,11 +327,21 @@ pub fn main(args: RunArgs) -> ExitCode {
             Ok(json) => println!("{json}"),
             Err(e) => {
                 eprintln!("mocu run: --dump {path}: {e}");
-                return ExitCode::from(2);
+                code = 2;
             }
         }
     }
-    code
+    let _ = std::io::stdout().flush();
+    let guard = crate::stop::bounded_teardown(code);
+    drop(layout);
+    drop(renderer);
+    drop(map);
+    drop(video);
+    host.stop_all();
+    ds.quiesce();
+    drain_events(&events, &sink);
+    drop(guard);
+    ExitCode::from(code)
 }
 
 /// Every component of every layout of the bundle, once (the first definition wins).
@@ -369,40 +357,47 @@ fn all_components(bundle: &mocu_language::Bundle) -> mocu_language::Program {
     p
 }
 
-/// Frames at 60 Hz on the CPU compositor, drawn only when something changed.
+/// Frames on the CPU compositor, drawn only when something changed (`crate::frames`):
+/// `--frames N` ticks N times at the display rate, otherwise until SIGINT or SIGTERM.
+/// Ends with the last frame drawn and written to `--screenshot`.
 fn run_headless(
     ds: &DataServer,
     args: &RunArgs,
     screen: (u32, u32),
     events: &Events,
     sink: &Arc<dyn EventSink>,
-) -> ExitCode {
+    stop: &crate::stop::Stop,
+) -> u8 {
     let mut display =
         match Display::new(ds, DisplayOptions::new(screen.0, screen.1).backend(BackendChoice::Cpu))
         {
             Ok(d) => d,
             Err(e) => {
                 eprintln!("mocu run: cannot start the display: {e}");
-                return ExitCode::from(2);
+                return 2;
             }
         };
-    let period = Duration::from_secs_f64(1.0 / FRAME_RATE);
+    let pace = args.frames.map_or(Pace::UntilStopped, Pace::Frames);
     let t0 = Instant::now();
-    let mut frame: u64 = 0;
-    loop {
-        drain_events(events, sink);
-        if args.frames.is_some_and(|n| frame >= n) || INTERRUPTED.load(Ordering::SeqCst) {
-            break;
-        }
-        frame += 1;
-        display.tick_animations();
-        display.frame();
-        if frame.is_multiple_of(FRAME_RATE as u64) {
-            eprintln!("{}", summary(ds, t0.elapsed()));
-        }
-        let due = t0 + period.mul_f64(frame as f64);
-        std::thread::sleep(due.saturating_duration_since(Instant::now()));
-    }
+    // A summary of the vehicles at most once a second, when a frame is drawn and it
+    // says something new: an idle run prints nothing.
+    let mut said = (t0, String::new());
+    let inputs = crate::frames::Inputs { stop: &stop.requests, events };
+    let c = crate::frames::run(
+        &mut display,
+        pace,
+        inputs,
+        |e| report(e, sink),
+        |st| {
+            if st.drawn && said.0.elapsed() >= Duration::from_secs(1) {
+                let line = summary(ds);
+                if line != said.1 {
+                    eprintln!("[{:6.1}s] {line}", t0.elapsed().as_secs_f64());
+                }
+                said = (Instant::now(), line);
+            }
+        },
+    );
     // Whatever changed during the last frame period is on the last frame.
     ds.quiesce();
     display.frame();
@@ -410,16 +405,22 @@ fn run_headless(
         && let Err(e) = display.screenshot(p)
     {
         eprintln!("mocu run: --screenshot {}: {e}", p.display());
-        return ExitCode::from(2);
+        return 2;
     }
-    let c = display.counters();
-    eprintln!("mocu: {} frames, {} drawn", frame, c.frames_drawn);
-    ExitCode::SUCCESS
+    eprintln!("mocu: {} frames, {} drawn, {} wake-ups", c.ticks, c.drawn, c.wakeups);
+    0
 }
 
 /// Prints the host's reports on stderr and writes trial records to the log.
 fn drain_events(events: &Events, sink: &Arc<dyn EventSink>) {
     for e in events.try_iter() {
+        report(e, sink);
+    }
+}
+
+/// Prints one host report on stderr, or writes it to the log.
+fn report(e: HostEvent, sink: &Arc<dyn EventSink>) {
+    {
         match e {
             HostEvent::Started { module, kind } => {
                 eprintln!("mocu: module {module} ({kind}) started")
@@ -449,7 +450,7 @@ fn drain_events(events: &Events, sink: &Arc<dyn EventSink>) {
 }
 
 /// One line: every vehicle with its speed, heading and fuel.
-fn summary(ds: &DataServer, t: Duration) -> String {
+fn summary(ds: &DataServer) -> String {
     let mut parts = Vec::new();
     if let Some(vs) = ds.resolve(&["vehicles"]) {
         for v in ds.children(vs).unwrap_or_default() {
@@ -472,7 +473,7 @@ fn summary(ds: &DataServer, t: Duration) -> String {
     if parts.is_empty() {
         parts.push("no vehicles".into());
     }
-    format!("[{:6.1}s] {}", t.as_secs_f64(), parts.join(" | "))
+    parts.join(" | ")
 }
 
 /// The subtree at a dotted object path (`root.vehicles`, `root`) as JSON.

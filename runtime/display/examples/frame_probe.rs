@@ -8,20 +8,8 @@ use std::time::Instant;
 
 /// This thread's CPU time in ns (`CLOCK_THREAD_CPUTIME_ID`): on a machine shared with
 /// compilers, wall time measures the neighbours.
-#[allow(unsafe_code)]
 fn cpu_ns() -> Option<u64> {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, ts: *mut Timespec) -> i32;
-    }
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: clock_gettime writes one timespec into the pointer it is given.
-    let r = unsafe { clock_gettime(3, &mut ts) };
-    (r == 0).then(|| ts.sec as u64 * 1_000_000_000 + ts.nsec as u64)
+    cpu_time::ThreadTime::try_now().ok().map(|t| t.as_duration().as_nanos() as u64)
 }
 
 /// Median CPU milliseconds of `n` runs (wall milliseconds where CPU time is unknown).

@@ -33,6 +33,7 @@ fn main() {
         display: DisplayOptions::new(w, h),
         frames,
         screenshot: shot.clone(),
+        stop: None,
     };
     let ds2 = ds.clone();
     let result = run_window(&ds, opts, move |d| {

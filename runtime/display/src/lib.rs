@@ -25,6 +25,8 @@ mod image;
 mod paint;
 mod path;
 pub mod pixel;
+#[cfg(feature = "gpu")]
+mod present;
 mod skia;
 mod text;
 #[cfg(feature = "gpu")]
@@ -51,7 +53,9 @@ pub use path::{Path, PathBuilder, PathEl};
 pub use skia::SkiaCanvas;
 pub use text::{FAMILY, measure as measure_text};
 #[cfg(feature = "gpu")]
-pub use window::{WindowOptions, run_window};
+pub use present::{WindowPath, choose_path};
+#[cfg(feature = "gpu")]
+pub use window::{WindowOptions, WindowStop, run_window};
 pub use wm::{FrameStats, Hit, PAINT_ERROR, WINDOW_TYPE, WinProps, WindowManager};
 
 /// Publishes a window object under `root.display` (what a compiled layout does): name,

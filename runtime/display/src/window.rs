@@ -1,10 +1,12 @@
 //! A real OS window (winit) showing a display through the wgpu compositor: what
 //! `mocu run` uses where there is a display server.
 
-use crate::display::{Counters, Display, DisplayError, DisplayOptions, PointerEvent};
+use crate::display::{Compositor, Counters, Display, DisplayError, DisplayOptions, PointerEvent};
 use crate::gpu::GpuCompositor;
+use crate::present::{CpuPresenter, WindowPath, choose_path};
 use mocu_dataserver::DataServer;
 use mocu_dataserver::Value;
+use parking_lot::Mutex;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -22,13 +24,59 @@ pub struct WindowOptions {
     /// Stop after this many frame ticks at the display rate (`--frames N`); `None` runs
     /// until the window is closed, drawing only when something changes.
     pub frames: Option<u64>,
-    /// Write the last frame here before returning (`--screenshot`).
+    /// Write the last frame here before returning (`--screenshot`), however the loop
+    /// ends: frames done, window closed or [`WindowStop::stop`].
     pub screenshot: Option<PathBuf>,
+    /// Ends the loop from another thread (a signal): `None` when only closing does.
+    pub stop: Option<WindowStop>,
 }
 
-/// Wakes the event loop: the world model changed what the display shows.
+/// Ends a running [`run_window`] from any thread, as if the window were closed (the last
+/// frame is still written to `screenshot`). Stopping before the loop starts ends it at
+/// once.
+#[derive(Clone, Default)]
+pub struct WindowStop(Arc<Mutex<StopState>>);
+
+#[derive(Default)]
+struct StopState {
+    requested: bool,
+    proxy: Option<EventLoopProxy<Wake>>,
+}
+
+impl WindowStop {
+    pub fn new() -> WindowStop {
+        WindowStop::default()
+    }
+
+    pub fn stop(&self) {
+        let mut st = self.0.lock();
+        st.requested = true;
+        if let Some(p) = &st.proxy {
+            let _ = p.send_event(Wake::Stop);
+        }
+    }
+
+    pub fn is_requested(&self) -> bool {
+        self.0.lock().requested
+    }
+
+    fn attach(&self, proxy: EventLoopProxy<Wake>) {
+        self.0.lock().proxy = Some(proxy);
+    }
+}
+
+impl std::fmt::Debug for WindowStop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "WindowStop {{ requested: {} }}", self.is_requested())
+    }
+}
+
+/// Wakes the event loop: the world model changed what the display shows, or stop.
 #[derive(Debug, Clone, Copy)]
-struct Wake;
+enum Wake {
+    Changed,
+    Stop,
+}
 
 struct App<'a> {
     ds: DataServer,
@@ -67,7 +115,9 @@ impl App<'_> {
         }))
         .map_err(|e| DisplayError::NoAdapter(e.to_string()))?;
         let size = window.inner_size();
-        let comp = GpuCompositor::for_window(
+        let info = adapter.get_info();
+        let path = choose_path(&info, std::env::var("MOCU_COMPOSITOR").ok().as_deref());
+        let gpu = GpuCompositor::for_window(
             &adapter,
             surface,
             d.width,
@@ -76,17 +126,35 @@ impl App<'_> {
             size.height,
             d.background,
         )?;
-        eprintln!(
-            "mocu-display: window {}x{} on {}",
+        let comp: Box<dyn Compositor> = match path {
+            WindowPath::Gpu => Box::new(gpu),
+            WindowPath::Cpu => {
+                let cpu = crate::compose::CpuCompositor::new(d.width, d.height, d.background)
+                    .ok_or(DisplayError::BadSize(d.width, d.height))?;
+                Box::new(CpuPresenter::new(cpu, gpu))
+            }
+        };
+        let why = match path {
+            WindowPath::Cpu => {
+                "layers composited on the CPU: a software adapter, or MOCU_COMPOSITOR=cpu"
+            }
+            WindowPath::Gpu => "layers composited on the GPU",
+        };
+        log::info!(
+            "window {}x{} on {} ({:?} adapter `{}`: {why})",
             d.width,
             d.height,
-            crate::display::Compositor::name(&comp)
+            comp.name(),
+            info.device_type,
+            info.name
         );
-        let mut display = Display::with_compositor(&self.ds, d.clone(), Box::new(comp))?;
+        eprintln!("mocu-display: window {}x{} on {} ({why})", d.width, d.height, comp.name());
+        let mut display = Display::with_compositor(&self.ds, d.clone(), comp)?;
         if let Some(setup) = self.setup.take() {
             setup(&mut display);
         }
-        // Idle: sleep until the world model changes, then wake the loop (no polling).
+        // Idle: sleep until the world model changes, then wake the loop (no polling, no
+        // timeout). The loop's end wakes it once more (`run_window`), and it ends.
         let waiter = display.change_waiter();
         let proxy = self.proxy.clone();
         let period = Duration::from_secs_f64(1.0 / d.rate.max(1.0));
@@ -94,10 +162,11 @@ impl App<'_> {
             .name("display-waker".into())
             .spawn(move || {
                 loop {
-                    if waiter.wait(Duration::from_secs(1)) {
-                        if proxy.send_event(Wake).is_err() {
+                    if waiter.wait(Duration::MAX) {
+                        if proxy.send_event(Wake::Changed).is_err() {
                             return;
                         }
+                        // At most one frame per display period.
                         std::thread::sleep(period);
                     }
                 }
@@ -115,6 +184,23 @@ impl App<'_> {
         el.exit();
     }
 
+    /// Ends the loop with the last frame written to `screenshot`.
+    fn finish(&mut self, el: &ActiveEventLoop) {
+        let Some(display) = &mut self.display else {
+            el.exit();
+            return;
+        };
+        if let Some(path) = &self.opts.screenshot
+            && let Err(e) = display.screenshot(path)
+        {
+            self.result = Err(e);
+            el.exit();
+            return;
+        }
+        self.result = Ok(display.counters());
+        el.exit();
+    }
+
     fn draw(&mut self, el: &ActiveEventLoop) {
         let Some(display) = &mut self.display else { return };
         let st = display.frame();
@@ -125,15 +211,7 @@ impl App<'_> {
         if let Some(n) = self.opts.frames
             && self.ticks >= n
         {
-            if let Some(path) = &self.opts.screenshot
-                && let Err(e) = display.screenshot(path)
-            {
-                self.result = Err(e);
-                el.exit();
-                return;
-            }
-            self.result = Ok(display.counters());
-            el.exit();
+            self.finish(el);
         }
     }
 }
@@ -148,6 +226,10 @@ impl ApplicationHandler<Wake> for App<'_> {
     }
 
     fn new_events(&mut self, el: &ActiveEventLoop, cause: StartCause) {
+        if self.opts.stop.as_ref().is_some_and(WindowStop::is_requested) {
+            self.finish(el);
+            return;
+        }
         if self.opts.frames.is_some() && matches!(cause, StartCause::ResumeTimeReached { .. }) {
             self.draw(el);
         }
@@ -163,19 +245,18 @@ impl ApplicationHandler<Wake> for App<'_> {
         }
     }
 
-    fn user_event(&mut self, el: &ActiveEventLoop, _: Wake) {
-        if self.opts.frames.is_none() {
-            self.draw(el);
+    fn user_event(&mut self, el: &ActiveEventLoop, wake: Wake) {
+        match wake {
+            Wake::Stop => self.finish(el),
+            Wake::Changed if self.opts.frames.is_none() => self.draw(el),
+            Wake::Changed => {}
         }
     }
 
     fn window_event(&mut self, el: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
         let Some(display) = &mut self.display else { return };
         match event {
-            WindowEvent::CloseRequested => {
-                self.result = Ok(display.counters());
-                el.exit();
-            }
+            WindowEvent::CloseRequested => self.finish(el),
             WindowEvent::Resized(s) => {
                 display.compositor_mut().resize_surface(s.width, s.height);
                 display.present();
@@ -297,6 +378,9 @@ pub fn run_window<'a>(
         .build()
         .map_err(|e| DisplayError::Window(e.to_string()))?;
     let proxy = el.create_proxy();
+    if let Some(stop) = &opts.stop {
+        stop.attach(el.create_proxy());
+    }
     let mut app = App {
         ds: ds.clone(),
         opts,
@@ -309,6 +393,11 @@ pub fn run_window<'a>(
         result: Err(DisplayError::Window("the event loop ended before the window opened".into())),
         cursor: (0.0, 0.0),
     };
-    el.run_app(&mut app).map_err(|e| DisplayError::Window(e.to_string()))?;
+    let ran = el.run_app(&mut app).map_err(|e| DisplayError::Window(e.to_string()));
+    // The waker thread sleeps until a change: this one finds the loop gone, and it ends.
+    if let Some(d) = &mut app.display {
+        d.invalidate_all();
+    }
+    ran?;
     app.result
 }

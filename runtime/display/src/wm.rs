@@ -709,8 +709,18 @@ impl WindowManager {
 
 impl Drop for WindowManager {
     fn drop(&mut self) {
-        for s in self.subs.lock().drain(..) {
-            self.ds.unsubscribe(s);
+        // Taken out first, then ended with the lock released: `unsubscribe` waits for a
+        // running callback, and `on_child` takes this lock (holding it here deadlocked).
+        // A callback still running may add a window's subscription meanwhile: once the
+        // children subscription has ended none runs, so the next round takes the last.
+        loop {
+            let subs = std::mem::take(&mut *self.subs.lock());
+            if subs.is_empty() {
+                break;
+            }
+            for s in subs {
+                self.ds.unsubscribe(s);
+            }
         }
         for m in ["swap", "animate", "animate_eased"] {
             let _ = self.ds.unpublish_method(self.display, m);
@@ -819,15 +829,18 @@ fn on_child(
         }
         Kind::New => {}
         Kind::Changed | Kind::Deleted => {
-            let mut st = sh.state.lock();
-            if let Some(e) = st.windows.remove(&guid) {
-                if let Some(s) = e.sub {
-                    ds.unsubscribe(s);
-                    subs.lock().retain(|x| *x != s);
-                }
+            let sub = {
+                let mut st = sh.state.lock();
+                let Some(e) = st.windows.remove(&guid) else { return };
                 st.removed.push(guid);
                 st.reindex = true;
                 sh.changed(&mut st);
+                e.sub
+            };
+            // Ended with no lock held: the window's property callback takes `state`.
+            if let Some(s) = sub {
+                subs.lock().retain(|x| *x != s);
+                ds.unsubscribe(s);
             }
         }
     }

@@ -152,11 +152,22 @@ impl Module for InputModule {
     fn stop(&mut self) {
         if let Some(sh) = self.shared.take() {
             sh.stop.store(true, Ordering::SeqCst);
-            sh.watches.lock().clear();
-            for s in sh.subs.lock().drain(..) {
-                sh.ctx.ds.unsubscribe(s);
+            // Taken out, then ended with no lock held: ending one waits for its running
+            // callback, which may take these locks. Rounds until a callback that was
+            // running has nothing more to add.
+            loop {
+                let watches = std::mem::take(&mut *sh.watches.lock());
+                let subs = std::mem::take(&mut *sh.subs.lock());
+                if watches.is_empty() && subs.is_empty() {
+                    break;
+                }
+                drop(watches);
+                for s in subs {
+                    sh.ctx.ds.unsubscribe(s);
+                }
             }
-            *sh.toasts.lock() = None;
+            let toasts = sh.toasts.lock().take();
+            drop(toasts);
             let threads: Vec<_> = sh.threads.lock().drain(..).collect();
             self.threads.extend(threads);
         }

@@ -70,10 +70,20 @@ impl Toasts {
 }
 
 impl Drop for Toasts {
+    /// Takes the watches and subscriptions out, then ends them with no lock held: ending
+    /// one waits for its running callback, which may push to `subs`. Rounds until none is
+    /// left (a callback that was running may have added one).
     fn drop(&mut self) {
-        self.shared.watches.lock().clear();
-        for s in self.shared.subs.lock().drain(..) {
-            self.shared.ds.unsubscribe(s);
+        loop {
+            let watches = std::mem::take(&mut *self.shared.watches.lock());
+            let subs = std::mem::take(&mut *self.shared.subs.lock());
+            if watches.is_empty() && subs.is_empty() {
+                break;
+            }
+            drop(watches);
+            for s in subs {
+                self.shared.ds.unsubscribe(s);
+            }
         }
     }
 }

@@ -33,6 +33,8 @@ struct Shared {
 
 #[derive(Default)]
 struct State {
+    /// The module is stopping: callbacks still running add nothing.
+    closed: bool,
     subs: Vec<SubscriptionId>,
     vehicles_watch: Option<PathWatch>,
     vehicles_sub: Option<SubscriptionId>,
@@ -77,16 +79,30 @@ impl MapModule {
 }
 
 impl Drop for MapModule {
+    /// Collects under the lock, then ends with it released: ending a watch or a
+    /// subscription waits for its running callback, and the callbacks take `state`
+    /// (dropping the watches under the lock deadlocked about one exit in 45).
     fn drop(&mut self) {
-        let (subs, maps) = {
+        let (watches, subs, maps) = {
             let mut st = self.shared.state.lock();
-            st.vehicles_watch = None;
-            st.per_vehicle.clear();
+            st.closed = true;
+            let mut watches: Vec<PathWatch> = st.vehicles_watch.take().into_iter().collect();
+            watches.extend(st.per_vehicle.drain().flat_map(|(_, w)| w));
             let mut subs = std::mem::take(&mut st.subs);
             subs.extend(st.vehicles_sub.take());
-            (subs, std::mem::take(&mut st.maps))
+            (watches, subs, std::mem::take(&mut st.maps))
         };
+        drop(watches);
         for s in subs {
+            self.shared.ds.unsubscribe(s);
+        }
+        // Whatever a callback that was running added meanwhile (none can run any more).
+        let (late_watches, late_sub) = {
+            let mut st = self.shared.state.lock();
+            (std::mem::take(&mut st.per_vehicle), st.vehicles_sub.take())
+        };
+        drop(late_watches);
+        if let Some(s) = late_sub {
             self.shared.ds.unsubscribe(s);
         }
         for m in maps {
@@ -109,7 +125,12 @@ impl Shared {
                     }
                 });
                 if ok.is_ok() {
-                    self.state.lock().maps.push(g);
+                    let mut st = self.state.lock();
+                    if st.closed {
+                        return;
+                    }
+                    st.maps.push(g);
+                    drop(st);
                     self.publish_input(g);
                 }
             }
@@ -123,11 +144,15 @@ impl Shared {
     }
 
     fn on_vehicles_folder(self: &Arc<Self>, folder: Option<Guid>) {
-        let old = self.state.lock().vehicles_sub.take();
+        let (old, watches) = {
+            let mut st = self.state.lock();
+            (st.vehicles_sub.take(), std::mem::take(&mut st.per_vehicle))
+        };
+        // Ended with the lock released (their callbacks take it).
         if let Some(s) = old {
             self.ds.unsubscribe(s);
         }
-        self.state.lock().per_vehicle.clear();
+        drop(watches);
         if let Some(f) = folder {
             let weak = Arc::downgrade(self);
             let sub =
@@ -136,7 +161,15 @@ impl Shared {
                         sh.on_vehicle(n.kind, *guid);
                     }
                 });
-            self.state.lock().vehicles_sub = sub.ok();
+            let mut st = self.state.lock();
+            if st.closed {
+                drop(st);
+                if let Ok(s) = sub {
+                    self.ds.unsubscribe(s);
+                }
+                return;
+            }
+            st.vehicles_sub = sub.ok();
         }
         self.repaint();
     }
@@ -158,10 +191,19 @@ impl Shared {
                         watches.push(w);
                     }
                 }
-                self.state.lock().per_vehicle.insert(v, watches);
+                let mut st = self.state.lock();
+                if st.closed {
+                    drop(st);
+                    drop(watches); // ended with the lock released
+                    return;
+                }
+                let old = st.per_vehicle.insert(v, watches);
+                drop(st);
+                drop(old);
             }
             Kind::Deleted => {
-                self.state.lock().per_vehicle.remove(&v);
+                let old = self.state.lock().per_vehicle.remove(&v);
+                drop(old); // ended with the lock released
             }
             Kind::Changed => {}
         }

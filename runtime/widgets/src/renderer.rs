@@ -151,24 +151,42 @@ impl WidgetRenderer {
 }
 
 impl Drop for WidgetRenderer {
+    /// Collects under the lock, then acts with it released: ending a watch or a
+    /// subscription waits for its running callback, and the callbacks take `state`.
     fn drop(&mut self) {
         let alert_watches = std::mem::take(&mut self.shared.alert_layers.lock().watches);
         drop(alert_watches);
-        let subs: Vec<SubscriptionId> = {
+        let (subs, windows, watch) = {
             let mut st = self.shared.state.lock();
             st.closed = true;
-            let mut v: Vec<_> = st.display_sub.take().into_iter().collect();
-            v.extend(st.windows.drain().map(|(g, s)| {
-                let _ = self.shared.ds.unpublish_method(g, "paint");
-                let _ = self.shared.ds.unpublish_method(g, "pointer");
-                s
-            }));
+            let mut v: Vec<SubscriptionId> = st.display_sub.take().into_iter().collect();
+            let mut windows = Vec::new();
+            for (g, s) in st.windows.drain() {
+                windows.push(g);
+                v.push(s);
+            }
             v.extend(st.widgets.drain().map(|(_, w)| w.sub));
             v.append(&mut st.vehicle_subs);
-            st.vehicles_watch = None;
-            v
+            (v, windows, st.vehicles_watch.take())
         };
+        for g in windows {
+            let _ = self.shared.ds.unpublish_method(g, "paint");
+            let _ = self.shared.ds.unpublish_method(g, "pointer");
+        }
+        drop(watch);
         for s in subs {
+            self.shared.ds.unsubscribe(s);
+        }
+        // Whatever a callback that was running added meanwhile (none runs any more).
+        let (late, late_watch) = {
+            let mut st = self.shared.state.lock();
+            let mut v: Vec<_> = st.windows.drain().map(|(_, s)| s).collect();
+            v.extend(st.widgets.drain().map(|(_, w)| w.sub));
+            v.append(&mut st.vehicle_subs);
+            (v, st.vehicles_watch.take())
+        };
+        drop(late_watch);
+        for s in late {
             self.shared.ds.unsubscribe(s);
         }
     }

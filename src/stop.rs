@@ -1,0 +1,71 @@
+//! How `mocu run` ends. SIGINT (Ctrl-C) and SIGTERM ask the frame loop (headless or
+//! windowed) to stop; the run then writes `--screenshot`, `--dump` and `--log` before it
+//! stops the modules. A second signal ends the process at once, and so does a teardown
+//! that has not finished within [`GRACE`] (its outputs are already written).
+
+use crossbeam_channel::{Receiver, Sender, bounded, never};
+use mocu_display::WindowStop;
+use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::iterator::Signals;
+use std::time::Duration;
+
+/// How long the modules get to stop after the outputs are written.
+pub const GRACE: Duration = Duration::from_secs(10);
+
+/// A stop asked for by a signal.
+pub struct Stop {
+    /// Receives one message when a stop is asked for.
+    pub requests: Receiver<()>,
+    /// Ends a window's event loop.
+    pub window: WindowStop,
+}
+
+/// Starts listening for SIGINT and SIGTERM. Where they cannot be caught, the run still
+/// ends with `--frames` or by closing its window (and says so).
+pub fn on_signals() -> Stop {
+    let window = WindowStop::new();
+    let (tx, rx) = bounded(1);
+    match listen(tx, window.clone()) {
+        Ok(()) => Stop { requests: rx, window },
+        Err(e) => {
+            eprintln!("mocu: cannot catch SIGINT/SIGTERM ({e}); Ctrl-C ends the run abruptly");
+            Stop { requests: never(), window }
+        }
+    }
+}
+
+fn listen(tx: Sender<()>, window: WindowStop) -> std::io::Result<()> {
+    let mut signals = Signals::new([SIGINT, SIGTERM])?;
+    std::thread::Builder::new().name("mocu-signals".into()).spawn(move || {
+        let mut seen = 0;
+        for sig in signals.forever() {
+            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+            seen += 1;
+            if seen == 1 {
+                eprintln!("mocu: {name}: stopping (send it again to exit at once)");
+                let _ = tx.try_send(());
+                window.stop();
+            } else {
+                eprintln!("mocu: {name} again: exiting now");
+                std::process::exit(128 + sig);
+            }
+        }
+    })?;
+    Ok(())
+}
+
+/// Ends the process with `code` if the returned guard is still alive after [`GRACE`]:
+/// drop it when the teardown is done.
+pub fn bounded_teardown(code: u8) -> Sender<()> {
+    let (done, wait) = bounded::<()>(0);
+    let _ = std::thread::Builder::new().name("mocu-teardown-guard".into()).spawn(move || {
+        if wait.recv_timeout(GRACE) == Err(crossbeam_channel::RecvTimeoutError::Timeout) {
+            eprintln!(
+                "mocu: the modules did not stop within {} s (one is stuck); exiting anyway",
+                GRACE.as_secs()
+            );
+            std::process::exit(code as i32);
+        }
+    });
+    done
+}
