@@ -331,3 +331,39 @@ fn emit(me: &Arc<Mutex<State>>, events: Vec<PathEvent>) {
         cb(e);
     }
 }
+
+impl DataServer {
+    /// The dotted path of an object from the root (`root.vehicles.usv1`): the inverse of
+    /// [`DataServer::resolve`], for events, logs and method arguments that name an object.
+    /// An object deleted meanwhile ends the path where it was lost.
+    pub fn path_text(&self, mut guid: Guid) -> String {
+        let mut names = Vec::new();
+        while guid != Guid::ROOT {
+            let Ok(info) = self.info(guid) else { break };
+            names.push(info.name.to_string());
+            match self.parent(guid) {
+                Ok(Some(p)) => guid = p,
+                _ => break,
+            }
+        }
+        names.push("root".into());
+        names.reverse();
+        names.join(".")
+    }
+}
+
+#[cfg(test)]
+mod path_text_tests {
+    use crate::{DataServer, ObjectInfo};
+    use mocu_value::Guid;
+
+    #[test]
+    fn path_text_names_an_object_from_the_root_and_resolves_back() {
+        let ds = DataServer::default();
+        let v = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+        let u = ds.create_object(v, ObjectInfo::new("usv1", "usv")).unwrap();
+        assert_eq!(ds.path_text(u), "root.vehicles.usv1");
+        assert_eq!(ds.path_text(Guid::ROOT), "root");
+        assert_eq!(ds.resolve(&["vehicles", "usv1"]), Some(u));
+    }
+}

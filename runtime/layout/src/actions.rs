@@ -4,7 +4,7 @@
 //! and `feedback_reason` properties of the widget), in `root.operator.feedback`, and in
 //! the event log. A refused write is feedback, never a crash.
 
-use crate::graph::{Builder, FnRef, Shared, State, eval_once, path_text, resolve};
+use crate::graph::{Builder, FnRef, Shared, State, eval_once, resolve};
 use crate::lower::{Base, LowerError, Lowerer, Scope, value_ty};
 use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
 use mocu_jit as jit;
@@ -314,7 +314,7 @@ fn select(sh: &Arc<Shared>, target: &Select, cx: ActionCtx) {
             i.map(|i| list[i])
         }
     };
-    let text = chosen.map(|g| path_text(ds, g));
+    let text = chosen.map(|g| ds.path_text(g));
     sh.sink.record(
         "action",
         &[
@@ -342,7 +342,7 @@ fn select(sh: &Arc<Shared>, target: &Select, cx: ActionCtx) {
 
 fn target_text(sh: &Shared, base: &Base, objects: &[String], cx: ActionCtx) -> String {
     let head = match (start(sh, base, cx), base) {
-        (Some(g), _) => path_text(&sh.ds, g),
+        (Some(g), _) => sh.ds.path_text(g),
         (None, Base::Selected) => "selected (nothing selected)".into(),
         (None, _) => "self".into(),
     };

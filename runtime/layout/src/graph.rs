@@ -581,21 +581,6 @@ pub(crate) fn ensure_object(
     }
 }
 
-/// The dotted-path text of an object (`root.vehicles.usv1`).
-pub(crate) fn path_text(ds: &DataServer, mut g: Guid) -> String {
-    let mut names = Vec::new();
-    while g != Guid::ROOT {
-        let Ok(info) = ds.info(g) else { break };
-        names.push(info.name.to_string());
-        match ds.parent(g) {
-            Ok(Some(p)) => g = p,
-            _ => break,
-        }
-    }
-    names.push("root".into());
-    names.reverse();
-    names.join(".")
-}
 
 impl Shared {
     fn weak(self: &Arc<Self>) -> Weak<Shared> {
@@ -832,7 +817,7 @@ impl Shared {
         instance: Option<usize>,
     ) -> String {
         match Self::start_of(st, base, instance) {
-            Some(Start::Object(o)) => format!("{}.{}", path_text(&self.ds, o), objs.join(".")),
+            Some(Start::Object(o)) => format!("{}.{}", self.ds.path_text(o), objs.join(".")),
             _ => format!("root.{}", objs.join(".")),
         }
     }
@@ -1096,7 +1081,7 @@ impl Shared {
             "instance",
             &[
                 ("template", Value::str(&tpl.var)),
-                ("object", Value::str(&path_text(&self.ds, object))),
+                ("object", Value::str(&self.ds.path_text(object))),
             ],
         );
         st.templates[t] = tpl;

@@ -17,21 +17,6 @@ pub const ROW: f32 = 26.0;
 pub const TITLE: f32 = 26.0;
 pub const WIDTH: f32 = 180.0;
 
-/// `root.<names…>` of an object.
-pub fn path_of(ds: &DataServer, mut g: Guid) -> String {
-    let mut names = Vec::new();
-    while g != Guid::ROOT {
-        let Ok(info) = ds.info(g) else { break };
-        names.push(info.name.to_string());
-        match ds.parent(g) {
-            Ok(Some(p)) => g = p,
-            _ => break,
-        }
-    }
-    names.push("root".into());
-    names.reverse();
-    names.join(".")
-}
 
 /// Closes the context menu, if one is open.
 pub fn close(ds: &DataServer) {
@@ -46,7 +31,7 @@ pub fn open(ds: &DataServer, object: Guid, at: Point) -> bool {
     close(ds);
     let Ok(info) = ds.info(object) else { return false };
     let Some(menu) = ds.resolve(&["display", "menus", &info.kind]) else { return false };
-    let path = path_of(ds, object);
+    let path = ds.path_text(object);
     let CallOutcome::Accepted(items) = ds.call_wait(menu, "open", vec![Value::str(&path)], None)
     else {
         return false;
