@@ -48,7 +48,9 @@ pub use geom::{IRect, Point, Rect, Size, Transform};
 #[cfg(feature = "gpu")]
 pub use gpu::GpuCompositor;
 pub use image::Image;
-pub use paint::{PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, with_canvas};
+pub use paint::{
+    PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, pointer_spec, with_canvas,
+};
 pub use path::{Path, PathBuilder, PathEl};
 pub use skia::SkiaCanvas;
 pub use text::{FAMILY, measure as measure_text};

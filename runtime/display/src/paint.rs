@@ -81,6 +81,17 @@ pub fn paint_spec() -> MethodSpec {
         .describe("Draws the window's content (called by the window manager on the frame thread)")
 }
 
+/// The `pointer` method's published signature (see the module docs): the window manager
+/// calls it, painters that take pointer input publish it with this one spec.
+pub fn pointer_spec() -> MethodSpec {
+    MethodSpec::new("pointer")
+        .param(ParamSpec::new("kind", ValueKind::String))
+        .param(ParamSpec::new("button", ValueKind::Int))
+        .param(ParamSpec::new("x", ValueKind::Float))
+        .param(ParamSpec::new("y", ValueKind::Float))
+        .describe("Pointer input, window-local: kind (enter, move, leave, down, up), button (0 left, 1 right, 2 middle, -1 none), x, y")
+}
+
 /// Claims `window`: publishes its `paint` method running `painter` with the canvas, then
 /// bumps its `revision` so that the next frame paints it.
 pub fn claim_window(

@@ -215,11 +215,7 @@ fn a_click_on_a_transparent_hud_pixel_reaches_the_map_below() {
         let clicks = clicks.clone();
         ds.publish_method_fn(
             g,
-            MethodSpec::new("pointer")
-                .param(ParamSpec::new("kind", ValueKind::String))
-                .param(ParamSpec::new("button", ValueKind::Int))
-                .param(ParamSpec::new("x", ValueKind::Float))
-                .param(ParamSpec::new("y", ValueKind::Float)),
+            pointer_spec(),
             move |a| {
                 clicks.lock().push(format!("{who}:{}", a[0].as_str().unwrap()));
                 CallOutcome::Accepted(vec![])

@@ -9,8 +9,8 @@
 //! the vehicle's type. `symbols()` answers `[name, x, y, …]` in window pixels.
 
 use mocu_dataserver::{
-    CallOutcome, DataServer, DottedPath, Executor, Kind, MethodSpec, Notification, ParamSpec,
-    PathWatch, Subject, SubscriptionId, Topic, ValueKind,
+    CallOutcome, DataServer, DottedPath, Executor, Kind, MethodSpec, Notification, PathWatch,
+    Subject, SubscriptionId, Topic,
 };
 use mocu_display::{
     Align, Baseline, Brush, Canvas, Color, PaintArgs, Path, Point, Rect, Stroke, TextStyle,
@@ -219,11 +219,7 @@ impl Shared {
 
     fn publish_input(self: &Arc<Self>, g: Guid) {
         let weak = Arc::downgrade(self);
-        let spec = MethodSpec::new("pointer")
-            .param(ParamSpec::new("kind", ValueKind::String))
-            .param(ParamSpec::new("button", ValueKind::Int))
-            .param(ParamSpec::new("x", ValueKind::Float))
-            .param(ParamSpec::new("y", ValueKind::Float));
+        let spec = mocu_display::pointer_spec();
         let _ = self.ds.publish_method_fn(g, spec, move |args| {
             let Some(sh) = weak.upgrade() else {
                 return CallOutcome::Failed("map stopped".into());

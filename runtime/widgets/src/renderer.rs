@@ -18,8 +18,7 @@
 use crate::component::Library;
 use crate::draw::draw_shapes;
 use mocu_dataserver::{
-    CallOutcome, DataServer, Executor, Kind, MethodSpec, Notification, ParamSpec, Subject,
-    SubscriptionId, Topic, ValueKind,
+    CallOutcome, DataServer, Executor, Kind, Notification, Subject, SubscriptionId, Topic,
 };
 use mocu_display::{
     Align, Baseline, Brush, Canvas, Color, PaintArgs, Path, Point, Rect, Stroke, TextStyle,
@@ -489,11 +488,7 @@ impl Shared {
     /// `press` method.
     fn publish_pointer(self: &Arc<Self>, window: Guid) {
         let weak = Arc::downgrade(self);
-        let spec = MethodSpec::new("pointer")
-            .param(ParamSpec::new("kind", ValueKind::String))
-            .param(ParamSpec::new("button", ValueKind::Int))
-            .param(ParamSpec::new("x", ValueKind::Float))
-            .param(ParamSpec::new("y", ValueKind::Float));
+        let spec = mocu_display::pointer_spec();
         let _ = self.ds.publish_method_fn(window, spec, move |args| {
             let Some(sh) = weak.upgrade() else {
                 return CallOutcome::Failed("renderer stopped".into());
