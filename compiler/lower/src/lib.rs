@@ -182,8 +182,13 @@ impl<'a> Lowerer<'a> {
                 for p in parts {
                     pieces.push(match p {
                         FormatPart::Text(t) => jit::Piece::Text(Arc::from(t.as_str())),
+                        // An absent part shows as `—`; the rest of the text stays.
                         FormatPart::Value { expr, spec } => {
-                            self.piece(expr, spec.as_ref().map(num_format))?
+                            let part = self.piece(expr, spec.as_ref().map(num_format))?;
+                            jit::Piece::Str(jit::Expr::Coalesce(
+                                Box::new(jit::Expr::Format(vec![part])),
+                                Box::new(jit::Expr::Str(Arc::from(ABSENT_PART))),
+                            ))
                         }
                     });
                 }
@@ -339,6 +344,9 @@ impl<'a> Lowerer<'a> {
     }
 }
 
+/// What an interpolation shows for a part whose value is absent.
+pub const ABSENT_PART: &str = "—";
+
 /// The widest a formatted number is padded to, in characters.
 pub const MAX_WIDTH: u32 = 64;
 /// The most digits written after the point (an f64 has 17 significant digits).
@@ -358,4 +366,25 @@ pub fn num_format(s: &FormatSpec) -> jit::NumFormat {
 /// `None` when the checker refuses it.
 pub fn parse_spec(s: &str) -> Option<FormatSpec> {
     mocu_language::passes::check_types::parse_spec(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolations_and_format_share_one_spec_rule() {
+        let cases = [
+            ("03.1", jit::NumFormat { zero: true, width: Some(3), precision: Some(1) }),
+            (".2", jit::NumFormat { zero: false, width: None, precision: Some(2) }),
+            ("200", jit::NumFormat { zero: false, width: Some(64), precision: None }),
+            ("0300.30", jit::NumFormat { zero: true, width: Some(64), precision: Some(17) }),
+            ("0", jit::NumFormat { zero: false, width: None, precision: None }),
+        ];
+        for (spec, want) in cases {
+            let parsed = parse_spec(spec).unwrap_or_else(|| panic!("{spec} parses"));
+            assert_eq!(num_format(&parsed), want, "{spec}");
+        }
+        assert_eq!(parse_spec("x1"), None, "what the checker refuses");
+    }
 }
