@@ -161,3 +161,87 @@ fn build_refuses_a_project_with_errors() {
         Some(2)
     );
 }
+
+/// A fresh folder of its own under the temp folder, with `files` written in it.
+fn project_dir(name: &str, files: &[(&str, &str)]) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mocu-cli-{}-{name}", std::process::id()));
+    for (path, text) in files {
+        let p = dir.join(path);
+        std::fs::create_dir_all(p.parent().expect("a folder")).expect("temp dir");
+        std::fs::write(&p, text).expect("write");
+    }
+    dir
+}
+
+const SCHEMA: &str = "[[instances]]\npath = \"root.vehicles.usv*\"\ntype = \"usv\"\n[types.usv.properties]\nfuel = { type = \"float\" }\n";
+const MISSPELT: &str = "window w { layer 1  visible root.vehicles.usv1.fule > 0 }\n";
+
+#[test]
+fn a_layout_is_checked_against_the_nearest_project_toml_above_it() {
+    let dir = project_dir(
+        "walk",
+        &[
+            ("project.toml", "[profile]\nlayouts = []\nschemas = [\"s.toml\"]\n"),
+            ("s.toml", SCHEMA),
+            ("screens/deep/a.mocu", MISSPELT),
+        ],
+    );
+    let layout = dir.join("screens/deep/a.mocu");
+    let o = mocu(&["check", "--format", "json", layout.to_str().expect("utf-8 path")]);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    assert!(stdout(&o).contains("E0401") && stdout(&o).contains("fuel"), "{}", stdout(&o));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("not checked"));
+}
+
+#[test]
+fn profile_names_the_project_of_layouts_outside_it() {
+    let dir = project_dir(
+        "flag",
+        &[
+            ("p/profile.toml", "[profile]\nlayouts = []\nschemas = [\"s.toml\"]\n"),
+            ("p/s.toml", SCHEMA),
+            ("a.mocu", MISSPELT),
+        ],
+    );
+    let (layout, profile) = (dir.join("a.mocu"), dir.join("p/profile.toml"));
+    let args =
+        ["check", "--profile", profile.to_str().expect("utf-8"), layout.to_str().expect("utf-8")];
+    let o = mocu(&args);
+    assert_eq!(o.status.code(), Some(1), "{}", stdout(&o));
+    assert!(stdout(&o).contains("has no property `fule`"), "{}", stdout(&o));
+    let missing =
+        mocu(&["check", "--profile", "no/such/profile.toml", layout.to_str().expect("utf-8")]);
+    assert_eq!(missing.status.code(), Some(2));
+}
+
+#[test]
+fn without_a_profile_check_says_once_that_property_names_were_not_checked() {
+    let dir = project_dir("none", &[("a.mocu", MISSPELT), ("b.mocu", MISSPELT)]);
+    let o = mocu(&["check", "--format", "json", dir.to_str().expect("utf-8 path")]);
+    assert_eq!(o.status.code(), Some(0), "exit codes are unchanged: {}", stdout(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.matches("were not checked").count(), 1, "{err}");
+    assert!(err.contains("1 other layout"), "{err}");
+    let v: serde_json::Value = serde_json::from_str(&stdout(&o)).expect("JSON stays clean");
+    assert_eq!(v.as_array().map(Vec::len), Some(0));
+}
+
+#[test]
+fn the_shipped_profile_sets_only_settings_its_modules_accept() {
+    let bad = project_dir(
+        "settings",
+        &[(
+            "project.toml",
+            "[profile]\nlayouts = []\n[modules.sim]\nvehicles = [\"usv1\"]\nspeed = 3\n",
+        )],
+    );
+    let o = mocu(&["check", bad.join("project.toml").to_str().expect("utf-8")]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stdout(&o).contains("no setting `speed`") && stdout(&o).contains("`vehicles`"),
+        "{}",
+        stdout(&o)
+    );
+    let shipped = mocu(&["check", "--deny", "warnings", "layouts/project.toml"]);
+    assert_eq!(shipped.status.code(), Some(0), "{}", stdout(&shipped));
+}

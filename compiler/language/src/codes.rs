@@ -31,6 +31,7 @@ pub const MISPLACED_CALL: &str = "E0306";
 pub const BAD_FORMAT: &str = "E0307";
 pub const NOT_A_PATH: &str = "E0308";
 pub const UNKNOWN_PRIMITIVE: &str = "E0309";
+pub const BAD_DURATION: &str = "E0310";
 
 pub const UNKNOWN_PROPERTY: &str = "E0401";
 pub const UNIT_MISMATCH: &str = "E0402";
@@ -41,6 +42,7 @@ pub const BAD_SCHEMA: &str = "E0405";
 pub const UNUSED_LET: &str = "W0001";
 pub const OUTSIDE_WINDOW: &str = "W0002";
 pub const CONSTANT_WATCH: &str = "W0003";
+pub const ABSURD_DURATION: &str = "W0004";
 
 /// Every code with a one-line description (SARIF rule text, docs check).
 pub const ALL: &[(&str, &str)] = &[
@@ -72,6 +74,7 @@ pub const ALL: &[(&str, &str)] = &[
     (BAD_FORMAT, "invalid format spec"),
     (NOT_A_PATH, "`set` target is not a property path"),
     (UNKNOWN_PRIMITIVE, "unknown drawing primitive or style"),
+    (BAD_DURATION, "duration that is negative, zero where a period is needed, or not constant"),
     (UNKNOWN_PROPERTY, "unknown property or method (schema)"),
     (UNIT_MISMATCH, "unit mismatch"),
     (OUT_OF_RANGE, "constant outside the declared range"),
@@ -80,6 +83,7 @@ pub const ALL: &[(&str, &str)] = &[
     (UNUSED_LET, "unused `let`"),
     (OUTSIDE_WINDOW, "widget wholly outside its window"),
     (CONSTANT_WATCH, "watch condition is constant"),
+    (ABSURD_DURATION, "duration longer than a day"),
 ];
 
 pub fn describe(code: &str) -> &'static str {

@@ -19,10 +19,12 @@ pub mod codes;
 pub mod diagnostics;
 pub mod fs;
 pub mod lexer;
+pub mod modules;
 pub mod parser;
 pub mod passes;
 pub mod profile;
 pub mod program;
+pub mod project;
 pub mod render;
 pub mod schema;
 pub mod source;
@@ -74,6 +76,7 @@ pub fn compile_layout(
     let program = check_types::check_types(&modules, &defs, schema, diags);
     // 5. Schema rules need complete, typed paths (after lets are inlined).
     check_schema::check_schema(&program, schema, diags);
+    check_method_args::check_method_args(&program, schema, diags);
     // 6. Warnings last: they only make sense on a program that resolved and typed.
     warn_unused::warn_unused(&modules, &used, diags);
     warn_outside_window::warn_outside_window(&program, config.screen, diags);
@@ -106,7 +109,8 @@ pub fn load_schema(
     Schema::parse(file, &text, diags)
 }
 
-/// Checks a profile: its schemas, then each layout against them. Returns the bundle.
+/// Checks a profile: its schemas and module settings, then each layout against them.
+/// Returns the bundle.
 pub fn check_profile(
     path: &str,
     text: String,
@@ -114,42 +118,13 @@ pub fn check_profile(
     sources: &mut SourceMap,
     diags: &mut Diagnostics,
 ) -> Bundle {
+    let project = project::load(path, &text, loader, sources, diags);
+    let Some(parsed) = &project.file else { return Bundle::default() };
     let file = sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
-    let parsed: profile::ProfileFile = match toml::from_str(&text) {
-        Ok(p) => p,
-        Err(e) => {
-            let r = e.span().unwrap_or(0..0);
-            diags
-                .error(codes::BAD_PROFILE, Span::new(file, r.start, r.end), format!("invalid profile: {}", e.message().trim()))
-                .help("a profile has a [profile] table with `layouts`, and optional `schemas`, [modules.*] and [inputs.*] (docs/language.md, \"Profiles\")");
-            return Bundle::default();
-        }
-    };
     let span_of = |needle: &str| {
         let at = text.find(&format!("\"{needle}\"")).unwrap_or(0);
         Span::new(file, at, at + needle.len() + 2)
     };
-    let mut schema = Schema::default();
-    for s in &parsed.profile.schemas {
-        match loader.resolve(path, s) {
-            Some(p) => {
-                if let Some(sch) = load_schema(&p, loader, sources, diags, Some(span_of(s))) {
-                    schema.merge(sch);
-                }
-            }
-            None => {
-                diags
-                    .error(
-                        codes::FILE_NOT_FOUND,
-                        span_of(s),
-                        format!("cannot find the schema `{s}`"),
-                    )
-                    .help("paths in a profile are relative to the profile");
-            }
-        }
-    }
-    let profile = parsed.to_profile();
-    let config = Config { screen: (profile.screen[0], profile.screen[1]) };
     let mut layouts = Vec::new();
     for l in &parsed.profile.layouts {
         let Some(p) = loader.resolve(path, l) else {
@@ -160,7 +135,8 @@ pub fn check_profile(
         };
         match loader.read(&p) {
             Ok(t) => {
-                let program = compile_layout(&p, t, loader, &schema, &config, sources, diags);
+                let program =
+                    compile_layout(&p, t, loader, &project.schema, &project.config, sources, diags);
                 layouts.push(Layout { path: l.clone(), program });
             }
             Err(e) => {
@@ -172,7 +148,46 @@ pub fn check_profile(
             }
         }
     }
-    Bundle { profile: Some(profile), schema, layouts }
+    Bundle { profile: Some(parsed.to_profile()), schema: project.schema.for_bundle(), layouts }
+}
+
+/// Checks one layout against a project (its schemas and settings), or against none.
+pub fn check_layout(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    project: Option<&project::Project>,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) -> Bundle {
+    let default = project::Project::default();
+    let p = project.unwrap_or(&default);
+    let program = compile_layout(path, text, loader, &p.schema, &p.config, sources, diags);
+    Bundle {
+        profile: None,
+        schema: p.schema.for_bundle(),
+        layouts: vec![Layout { path: path.to_string(), program }],
+    }
+}
+
+/// The project a layout is checked in: the profile at `profile` when given, else the
+/// nearest `project.toml` above the layout ([`project::discover`]); `None` when there is none.
+/// Problems of the profile itself are reported.
+pub fn project_of(
+    layout: &str,
+    profile: Option<&str>,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) -> Option<project::Project> {
+    let path = match profile {
+        Some(p) => p.to_string(),
+        None => project::discover(layout, loader)?,
+    };
+    match loader.read(&path) {
+        Ok(text) => Some(project::load(&path, &text, loader, sources, diags)),
+        Err(_) => None,
+    }
 }
 
 /// What kind of file a path holds, judged by its extension and, for `.toml`, its shape.
@@ -200,7 +215,8 @@ pub fn file_kind(path: &str, text: &str) -> FileKind {
     }
 }
 
-/// Checks one file of any kind (text already read). Layouts and profiles give a bundle.
+/// Checks one file of any kind (text already read). Layouts and profiles give a bundle; a
+/// layout is checked in the project of the nearest `project.toml` above it, if any.
 pub fn check_path(
     path: &str,
     text: String,
@@ -210,20 +226,8 @@ pub fn check_path(
 ) -> Option<Bundle> {
     match file_kind(path, &text) {
         FileKind::Layout => {
-            let program = compile_layout(
-                path,
-                text,
-                loader,
-                &Schema::default(),
-                &Config::default(),
-                sources,
-                diags,
-            );
-            Some(Bundle {
-                profile: None,
-                schema: Schema::default(),
-                layouts: vec![Layout { path: path.to_string(), program }],
-            })
+            let project = project_of(path, None, loader, sources, diags);
+            Some(check_layout(path, text, loader, project.as_ref(), sources, diags))
         }
         FileKind::Profile => Some(check_profile(path, text, loader, sources, diags)),
         FileKind::Schema => {

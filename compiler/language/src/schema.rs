@@ -31,6 +31,10 @@ pub struct Schema {
     pub instances: Vec<Instance>,
     #[serde(default)]
     pub types: BTreeMap<String, ObjectType>,
+    /// The vehicles a profile's modules publish under `root.vehicles` (names and `*`
+    /// patterns), when the profile says which; not part of a schema file.
+    #[serde(skip)]
+    pub vehicles: Option<Vec<String>>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -140,6 +144,11 @@ impl Schema {
                 None
             }
         }
+    }
+
+    /// The schema as a bundle stores it (what the profile's modules publish is not kept).
+    pub fn for_bundle(&self) -> Schema {
+        Schema { vehicles: None, ..self.clone() }
     }
 
     /// Merges another schema into this one (later files add types and instances).

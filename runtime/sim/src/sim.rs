@@ -35,6 +35,9 @@ pub struct SimConfig {
     /// Live data with nobody at the controls: the first vehicle of each type arms, starts
     /// and patrols its route on appearing; the others wait for the operator.
     pub autostart: bool,
+    /// The vehicles by name, in the order they appear (the `vehicles` setting); each name
+    /// starts with its type (`usv`, `ugv`, `uav`). Empty: `usv`, `ugv`, `uav` count them.
+    pub names: Vec<String>,
 }
 
 impl Default for SimConfig {
@@ -51,6 +54,7 @@ impl Default for SimConfig {
             camera_height: 48,
             origin: (32.7100, -117.2400),
             autostart: true,
+            names: Vec::new(),
         }
     }
 }
@@ -78,6 +82,7 @@ impl SimConfig {
                 e(spec.f64_or("origin_lon", d.origin.1))?,
             ),
             autostart: spec.bool_or("autostart", d.autostart).map_err(|e| e.to_string())?,
+            names: names(spec)?,
         };
         if !(cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0) {
             return Err(format!("module `{}`: `rate_hz` must be in (0, 1000]", spec.name));
@@ -91,6 +96,46 @@ impl SimConfig {
         }
         Ok(cfg)
     }
+}
+
+/// The `vehicles` setting: names, each starting with its type, none twice.
+fn names(spec: &ModuleSpec) -> Result<Vec<String>, String> {
+    let Some(v) = spec.settings.get("vehicles") else { return Ok(Vec::new()) };
+    let bad = || {
+        format!(
+            "module `{}`: `vehicles` must be a list of names, e.g. [\"usv1\", \"uav1\"]",
+            spec.name
+        )
+    };
+    let list = v.as_array().ok_or_else(bad)?;
+    let mut out: Vec<String> = Vec::new();
+    for n in list {
+        let n = n.as_str().ok_or_else(bad)?;
+        if kind_of(n).is_none() || !n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(format!(
+                "module `{}`: vehicle `{n}` must start with its type (usv, ugv or uav) and have only letters, digits and `_`",
+                spec.name
+            ));
+        }
+        if out.iter().any(|o| o == n) {
+            return Err(format!("module `{}`: vehicle `{n}` is named twice", spec.name));
+        }
+        out.push(n.to_string());
+    }
+    if ["usv", "ugv", "uav"].iter().any(|k| spec.settings.contains_key(*k)) {
+        return Err(format!(
+            "module `{}`: give either `vehicles` or the counts `usv`, `ugv`, `uav`",
+            spec.name
+        ));
+    }
+    Ok(out)
+}
+
+/// The type of a vehicle named `usv…`, `ugv…` or `uav…`.
+fn kind_of(name: &str) -> Option<VehicleKind> {
+    [VehicleKind::Usv, VehicleKind::Ugv, VehicleKind::Uav]
+        .into_iter()
+        .find(|k| name.starts_with(k.type_name()))
 }
 
 struct World {
@@ -115,7 +160,13 @@ impl Sim {
         let root = world::vehicles(&ctx.ds)?;
         let mut pending = VecDeque::new();
         let mut k = 0;
-        let n = cfg.usv.max(cfg.ugv).max(cfg.uav);
+        for name in &cfg.names {
+            if let Some(kind) = kind_of(name) {
+                pending.push_back((k as f64 * cfg.appear_every, kind, name.clone()));
+                k += 1;
+            }
+        }
+        let n = if cfg.names.is_empty() { cfg.usv.max(cfg.ugv).max(cfg.uav) } else { 0 };
         for i in 0..n {
             for (kind, count) in [
                 (VehicleKind::Usv, cfg.usv),
@@ -321,7 +372,8 @@ impl Sim {
         let patrol = world::create_route(ds, ex, routes, "patrol", frame, &square)?;
         self.publish_methods(guid)?;
         let mut v = v;
-        if w.cfg.autostart && name.ends_with('1') && !name.ends_with("11") {
+        let first_of_kind = !w.vehicles.iter().any(|o| o.kind == kind);
+        if w.cfg.autostart && first_of_kind {
             v.armed = true;
             v.engine = true;
             v.guidance =

@@ -246,3 +246,41 @@ fn camera_frames_flow_through_the_listener() {
     assert!(frames.windows(2).all(|w| w[1].3 == w[0].3 + 1), "in order, none lost");
     assert_eq!(ds.get(cam, "frames").unwrap(), Value::Int(*frames.last().map(|f| &f.3).unwrap()));
 }
+
+#[test]
+fn the_vehicles_setting_names_the_vehicles_in_the_order_they_appear() {
+    let list = toml::Value::Array(["uav_north", "usv7", "usv2"].map(toml::Value::from).to_vec());
+    let spec = mocu_host::ModuleSpec::new("sim").with("vehicles", list).with("autostart", true);
+    let cfg = SimConfig::from_spec(&spec).unwrap();
+    let (ds, s) = sim(SimConfig { appear_every: 1.0, ..cfg });
+    run(&s, 2.5);
+    assert_eq!(s.vehicle_names(), ["uav_north", "usv7", "usv2"]);
+    let kind = |n: &str| ds.info(v(&ds, n)).unwrap().kind.to_string();
+    assert_eq!((kind("uav_north"), kind("usv7")), ("uav".to_string(), "usv".to_string()));
+    // Autostart: the first of each type arms; the second waits for the operator.
+    let armed = |n: &str| ds.get(v(&ds, n), "armed").unwrap() == Value::Bool(true);
+    assert!(armed("usv7") && armed("uav_north") && !armed("usv2"));
+}
+
+#[test]
+fn the_vehicles_setting_refuses_untyped_names_duplicates_and_counts_beside_it() {
+    let names = |v: &[&str]| toml::Value::Array(v.iter().map(|s| toml::Value::from(*s)).collect());
+    for (spec, why) in [
+        (
+            mocu_host::ModuleSpec::new("sim").with("vehicles", names(&["boat1"])),
+            "start with its type",
+        ),
+        (
+            mocu_host::ModuleSpec::new("sim").with("vehicles", names(&["usv1", "usv1"])),
+            "named twice",
+        ),
+        (
+            mocu_host::ModuleSpec::new("sim").with("vehicles", names(&["usv1"])).with("usv", 2),
+            "either",
+        ),
+        (mocu_host::ModuleSpec::new("sim").with("vehicles", "usv1"), "list of names"),
+    ] {
+        let e = SimConfig::from_spec(&spec).unwrap_err();
+        assert!(e.contains(why), "{e}");
+    }
+}

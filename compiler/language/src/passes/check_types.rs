@@ -8,6 +8,7 @@
 //! Runs after `resolve_names`: a name it cannot resolve was reported there, so here it just
 //! becomes the `{error}` type, which is accepted everywhere (no cascades).
 
+use super::check_durations::Use;
 use super::{DefId, Definitions, ModuleId, Modules, component_item, let_item};
 use crate::ast::{self, BinOp, ExprKind, Item, LitUnit, StrPart, UnOp};
 use crate::builtins::{self, Returns};
@@ -179,7 +180,7 @@ impl Typer<'_, '_> {
                 let when = self.condition(&w.when, scope, "a watch's `when`");
                 let hold_ms = w.hold.as_ref().and_then(|h| {
                     let b = self.expect(h, scope, &Type::DURATION, "a hold time (`for 5s`)");
-                    b.expr.constant().and_then(|c| c.number())
+                    super::check_durations::check_duration(&b.expr, Use::Hold, self.diags)
                 });
                 let clear =
                     w.clear.as_ref().map(|c| self.condition(c, scope, "a watch's `clear when`"));
@@ -190,7 +191,7 @@ impl Typer<'_, '_> {
                         &Type::DURATION,
                         "a repeat period (`repeat every 30s`)",
                     );
-                    b.expr.constant().and_then(|c| c.number())
+                    super::check_durations::check_duration(&b.expr, Use::Repeat, self.diags)
                 });
                 let actions = self.actions(&w.actions, scope);
                 sink.watches.push(Watch {
@@ -698,11 +699,9 @@ impl Typer<'_, '_> {
                     let duration_ms = duration
                         .as_ref()
                         .and_then(|d| {
-                            self.expect(d, scope, &Type::DURATION, "a swap's duration")
-                                .expr
-                                .constant()
+                            let b = self.expect(d, scope, &Type::DURATION, "a swap's duration");
+                            super::check_durations::check_duration(&b.expr, Use::Swap, self.diags)
                         })
-                        .and_then(|c| c.number())
                         .unwrap_or(250.0);
                     out.push(Action::Swap {
                         a: a.name.clone(),
@@ -1047,6 +1046,14 @@ impl Typer<'_, '_> {
             Node::Path(mut p) => {
                 p.segments.push(name);
                 let from_root = p.base == PathBase::Root;
+                if from_root && p.segments.len() <= 2 {
+                    super::check_paths::check_root_member(
+                        self.schema,
+                        &p.segments,
+                        name_span,
+                        self.diags,
+                    );
+                }
                 // An unknown member is reported here, where the segment's own span is known
                 // (lets are inlined later, at their uses).
                 if let Lookup::Unknown { object_type, index, candidates } =

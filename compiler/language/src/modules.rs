@@ -1,0 +1,172 @@
+//! What each module kind of `mocu run` accepts as settings (`[modules.NAME]` tables of a
+//! profile): the declaration the compiler checks profiles against, without depending on the
+//! runtime crates. The runtime reads the same keys (`mocu-sim`, `mocu-mavlink`, `mocu-video`,
+//! `mocu-input`); a test of the `mocu` binary starts every kind with every key declared here.
+//! docs/language.md, "Profiles", lists them (and a test keeps that list complete).
+
+/// The type of a setting's value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SettingType {
+    Int,
+    Number,
+    Bool,
+    String,
+    /// An array of strings.
+    Names,
+}
+
+impl SettingType {
+    pub fn describe(self) -> &'static str {
+        match self {
+            SettingType::Int => "a whole number",
+            SettingType::Number => "a number",
+            SettingType::Bool => "true or false",
+            SettingType::String => "a string",
+            SettingType::Names => "a list of names, e.g. [\"usv1\", \"uav1\"]",
+        }
+    }
+
+    /// Whether a TOML value has this type.
+    pub fn accepts(self, v: &toml::Value) -> bool {
+        match (self, v) {
+            (SettingType::Int, toml::Value::Integer(_)) => true,
+            (SettingType::Number, toml::Value::Integer(_) | toml::Value::Float(_)) => true,
+            (SettingType::Bool, toml::Value::Boolean(_)) => true,
+            (SettingType::String, toml::Value::String(_)) => true,
+            (SettingType::Names, toml::Value::Array(a)) => a.iter().all(|x| x.is_str()),
+            _ => false,
+        }
+    }
+}
+
+/// One setting a module kind accepts.
+#[derive(Clone, Copy, Debug)]
+pub struct Setting {
+    pub name: &'static str,
+    pub ty: SettingType,
+    /// The value used when the key is left out, as text.
+    pub default: &'static str,
+    pub description: &'static str,
+}
+
+/// A module kind and its settings.
+#[derive(Clone, Copy, Debug)]
+pub struct ModuleKind {
+    pub kind: &'static str,
+    pub description: &'static str,
+    pub settings: &'static [Setting],
+}
+
+const fn s(
+    name: &'static str,
+    ty: SettingType,
+    default: &'static str,
+    description: &'static str,
+) -> Setting {
+    Setting { name, ty, default, description }
+}
+
+use SettingType::*;
+
+/// Keys every `[modules.NAME]` table may have, whatever its kind.
+pub const COMMON: &[Setting] = &[
+    s("kind", String, "the table's NAME", "Which module runs: sim, mavlink, video, codec or input"),
+    s(
+        "order",
+        Int,
+        "after the others",
+        "Start order (lower first); then sim, mavlink, video, then by name",
+    ),
+];
+
+/// Every module kind `mocu run` knows.
+pub const MODULES: &[ModuleKind] = &[
+    ModuleKind {
+        kind: "sim",
+        description: "The built-in simulator: vehicles under root.vehicles",
+        settings: &[
+            s(
+                "vehicles",
+                Names,
+                "usv1, usv2, ugv1, uav1",
+                "The vehicles, in the order they appear; each name starts with its type: usv, ugv or uav (replaces usv, ugv, uav)",
+            ),
+            s(
+                "usv",
+                Int,
+                "2",
+                "How many surface vehicles (usv1, usv2, …), when `vehicles` is not given",
+            ),
+            s("ugv", Int, "1", "How many ground vehicles (ugv1, …), when `vehicles` is not given"),
+            s("uav", Int, "1", "How many air vehicles (uav1, …), when `vehicles` is not given"),
+            s("seed", Int, "1", "Random seed: the same seed gives the same run"),
+            s("appear_every", Number, "0.5", "Seconds between two vehicles appearing"),
+            s("rate_hz", Number, "20", "Simulation steps per second, in (0, 1000]"),
+            s("camera_fps", Number, "10", "Simulated camera frames per second"),
+            s("camera_width", Int, "64", "Simulated camera width in px, 1 to 1024"),
+            s("camera_height", Int, "48", "Simulated camera height in px, 1 to 1024"),
+            s("origin_lat", Number, "32.71", "Latitude of the local origin, in degrees"),
+            s("origin_lon", Number, "-117.24", "Longitude of the local origin, in degrees"),
+            s(
+                "autostart",
+                Bool,
+                "true",
+                "The first vehicle of each type arms and patrols on its own",
+            ),
+        ],
+    },
+    ModuleKind {
+        kind: "mavlink",
+        description: "MAVLink 2 over UDP: vehicles heard appear as root.vehicles.mav<sysid>",
+        settings: &[
+            s("address", String, "0.0.0.0:14550", "UDP address to listen on (HOST:PORT)"),
+            s("command_timeout_ms", Int, "1000", "How long to wait for a command's answer, in ms"),
+            s("attempts", Int, "3", "How many times a command is sent before it fails, 1 to 100"),
+            s(
+                "link_timeout_ms",
+                Int,
+                "3000",
+                "Silence after which a vehicle's link is lost, in ms",
+            ),
+        ],
+    },
+    ModuleKind {
+        kind: "video",
+        description: "Video receiver (RTP/H.264 over UDP): streams under root.cameras",
+        settings: &[
+            s("address", String, "0.0.0.0:5600", "UDP address to listen on (HOST:PORT)"),
+            s("camera", String, "none", "Path of the camera object the stream belongs to"),
+            s("feeds", String, "auto", "Which feeds to receive"),
+            s("decode", Bool, "true", "Decode frames (false: count them only)"),
+        ],
+    },
+    ModuleKind {
+        kind: "codec",
+        description: "Decodes one camera's frames",
+        settings: &[s("source", String, "(required)", "Path of the camera object to decode")],
+    },
+    ModuleKind {
+        kind: "input",
+        description: "Operator input: gamepads, keyboard, scripted input",
+        settings: &[
+            s("rate_hz", Number, "50", "Axis sampling rate, 1 to 250"),
+            s("double_ms", Number, "300", "Longest gap of a double press, in ms, 10 to 2000"),
+            s("script", String, "none", "A file of scripted input events (for trials and tests)"),
+            s("toasts", Int, "5", "How many input toasts are kept, 0 to 20"),
+            s("gilrs", Bool, "true", "Read gamepads"),
+            s("auto_select", Bool, "true", "Select the first vehicle when it appears"),
+        ],
+    },
+];
+
+/// The declaration of a module kind.
+pub fn kind(name: &str) -> Option<&'static ModuleKind> {
+    MODULES.iter().find(|m| m.kind == name)
+}
+
+impl ModuleKind {
+    /// The declaration of one of its keys (or a common key).
+    pub fn setting(&self, key: &str) -> Option<&'static Setting> {
+        self.settings.iter().chain(COMMON).find(|s| s.name == key)
+    }
+}
