@@ -92,13 +92,9 @@ fn compile_component(c: &Component, index: usize) -> Result<(jit::Function, Comp
     for s in &c.shapes {
         let first = outs.len();
         for (i, a) in s.args.iter().enumerate() {
-            let want = if s.kind == "text" && i == 2 {
-                jit::Ty::Str
-            } else if s.kind == "image" && i == 4 {
-                jit::Ty::Str
-            } else {
-                jit::Ty::Num
-            };
+            // The text of `text` and the source of `image` are strings; the rest numbers.
+            let text_arg = (s.kind == "text" && i == 2) || (s.kind == "image" && i == 4);
+            let want = if text_arg { jit::Ty::Str } else { jit::Ty::Num };
             let ty = value_ty(&a.expr.ty).unwrap_or(want);
             // A number shown by `text` is written with its default format.
             let e = if want == jit::Ty::Str && ty == jit::Ty::Num {
