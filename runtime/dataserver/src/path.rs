@@ -10,6 +10,7 @@ use crate::server::DataServer;
 use crate::subscription::{SubscriptionId, Topic};
 use mocu_value::{Guid, PropName, Value};
 use parking_lot::Mutex;
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::Arc;
 
 /// A path to a property: object names from the root, then the property name.
@@ -71,6 +72,7 @@ type PathCallback = Box<dyn FnMut(&PathEvent) + Send + 'static>;
 pub struct PathWatch {
     ds: DataServer,
     state: Arc<Mutex<State>>,
+    nowait: bool,
 }
 
 struct State {
@@ -86,6 +88,8 @@ struct State {
     callback: Arc<Mutex<PathCallback>>,
     /// Watching the object at the end of the path, not a property of it.
     object_only: bool,
+    /// Events found while the watch was set up, emitted by its first executor job.
+    initial: Vec<PathEvent>,
 }
 
 impl DataServer {
@@ -144,21 +148,34 @@ impl DataServer {
             generation: 0,
             reported: None,
             closed: false,
-            executor,
+            executor: executor.clone(),
             callback: Arc::new(Mutex::new(callback)),
             object_only,
+            initial: Vec::new(),
         }));
-        let events = {
-            let mut st = state.lock();
-            rebuild(self, &state, &mut st, 0)
-        };
-        emit(&state, events);
-        Ok(PathWatch { ds: self.clone(), state })
+        let mut st = state.lock();
+        // The first events go out on the executor, before anything the subscriptions made
+        // below deliver there (this job is queued first), never on the caller's thread.
+        let (me, ds) = (state.clone(), self.clone());
+        executor.spawn(move || {
+            let events = std::mem::take(&mut me.lock().initial);
+            emit(&ds, &me, events);
+        });
+        st.initial = rebuild(self, &state, &mut st, 0);
+        drop(st);
+        Ok(PathWatch { ds: self.clone(), state, nowait: false })
     }
 }
 
 impl PathWatch {
     pub fn cancel(self) {}
+
+    /// Ends the watch without waiting for a callback that is running now (see
+    /// `DataServer::unsubscribe_nowait`): for `Drop` impls and code holding a lock the
+    /// callback may need. No callback starts after this returns.
+    pub fn cancel_nowait(mut self) {
+        self.nowait = true;
+    }
 
     /// The object the path currently reaches, if any.
     pub fn bound_object(&self) -> Option<Guid> {
@@ -175,7 +192,11 @@ impl Drop for PathWatch {
             std::mem::take(&mut st.subs)
         };
         for (id, _) in subs {
-            self.ds.unsubscribe(id);
+            if self.nowait {
+                self.ds.unsubscribe_nowait(id);
+            } else {
+                self.ds.unsubscribe(id);
+            }
         }
     }
 }
@@ -184,7 +205,7 @@ impl Drop for PathWatch {
 /// as far as the objects exist. Returns events to report.
 fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) -> Vec<PathEvent> {
     for (id, _) in st.subs.drain(k..) {
-        ds.unsubscribe(id);
+        ds.unsubscribe_nowait(id);
     }
     st.bound.truncate(k + 1);
     let mut events = Vec::new();
@@ -194,17 +215,11 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
         st.generation += 1;
         let generation = st.generation;
         let at_end = j == st.path.objects.len();
-        if at_end && st.object_only {
-            if st.reported.as_ref().map(|r| r.0) != Some(at) {
-                st.reported = Some((at, Value::Bool(true)));
-                events.push(PathEvent { kind: Kind::New, object: at, value: None });
-            }
-            break;
-        }
-        let topic = if at_end {
-            Topic::Properties { object: at, names: Some(vec![st.path.property]) }
-        } else {
-            Topic::Children { object: at }
+        let topic = match (at_end, st.object_only) {
+            // No property: only the object's own Deleted reaches this subscription.
+            (true, true) => Topic::Properties { object: at, names: Some(Vec::new()) },
+            (true, false) => Topic::Properties { object: at, names: Some(vec![st.path.property]) },
+            (false, _) => Topic::Children { object: at },
         };
         let weak = Arc::downgrade(me);
         let ds2 = ds.clone();
@@ -214,7 +229,7 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
                     let mut st = me.lock();
                     on_notification(&ds2, &me, &mut st, j, generation, n)
                 };
-                emit(&me, events);
+                emit(&ds2, &me, events);
             }
         });
         match sub {
@@ -222,6 +237,10 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
             Err(_) => break, // vanished meanwhile: its parent's watch will tell us
         }
         if at_end {
+            if st.object_only && st.reported.as_ref().map(|r| r.0) != Some(at) {
+                st.reported = Some((at, Value::Bool(true)));
+                events.push(PathEvent { kind: Kind::New, object: at, value: None });
+            }
             break;
         }
         match ds.find_child(at, &st.path.objects[j]) {
@@ -240,6 +259,25 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
     events
 }
 
+/// Makes level `level + 1` follow the first child of `bound[level]` with the wanted name, as
+/// the tree is now (a sibling created or renamed before the followed one takes over).
+fn relink(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, level: usize) -> Vec<PathEvent> {
+    let first = ds.find_child(st.bound[level], &st.path.objects[level]).ok().flatten();
+    if first == st.bound.get(level + 1).copied() {
+        return Vec::new();
+    }
+    let mut ev = drop_reported(st);
+    for (id, _) in st.subs.drain(level + 1..) {
+        ds.unsubscribe_nowait(id);
+    }
+    st.bound.truncate(level + 1);
+    if let Some(first) = first {
+        st.bound.push(first);
+        ev.extend(rebuild(ds, me, st, level + 1));
+    }
+    ev
+}
+
 fn on_notification(
     ds: &DataServer,
     me: &Arc<Mutex<State>>,
@@ -253,6 +291,26 @@ fn on_notification(
     }
     let at_end = level == st.path.objects.len();
     match (&n.subject, at_end) {
+        (Subject::Object, _) => {
+            // The object at this level is gone (its subscription ended with this).
+            let mut ev = drop_reported(st);
+            for (id, _) in st.subs.drain(level..) {
+                ds.unsubscribe_nowait(id);
+            }
+            if level == 0 {
+                // The start object itself: nothing can be reached from it again.
+                st.bound.truncate(1);
+                return ev;
+            }
+            st.bound.truncate(level);
+            // Its parent's watch is still there: follow another child of that name now.
+            let first = ds.find_child(st.bound[level - 1], &st.path.objects[level - 1]);
+            if let Ok(Some(other)) = first {
+                st.bound.push(other);
+                ev.extend(rebuild(ds, me, st, level));
+            }
+            ev
+        }
         (Subject::Property { value, .. }, true) => {
             let obj = st.bound[level];
             match (n.kind, value) {
@@ -265,45 +323,10 @@ fn on_notification(
                     st.reported = Some((obj, v.clone()));
                     vec![PathEvent { kind, object: obj, value: Some(v.clone()) }]
                 }
-                _ => match st.reported.take() {
-                    Some((o, _)) => vec![PathEvent { kind: Kind::Deleted, object: o, value: None }],
-                    None => Vec::new(),
-                },
+                _ => drop_reported(st),
             }
         }
-        (Subject::Child { guid, name, .. }, false) => {
-            let wanted = &*st.path.objects[level];
-            let next = st.bound.get(level + 1).copied();
-            let matches = &**name == wanted && n.kind != Kind::Deleted;
-            match next {
-                None if matches => {
-                    st.bound.push(*guid);
-                    rebuild(ds, me, st, level + 1)
-                }
-                Some(b) if b == *guid && !matches => {
-                    // Our object went away or was renamed: look for another of that name.
-                    match ds.find_child(st.bound[level], wanted) {
-                        Ok(Some(other)) if other != *guid => {
-                            let mut ev = drop_reported(st);
-                            st.bound.truncate(level + 1);
-                            st.bound.push(other);
-                            ev.extend(rebuild(ds, me, st, level + 1));
-                            ev
-                        }
-                        _ => {
-                            // Nothing reachable below this level until a matching child
-                            // appears (this level's subscription will tell us).
-                            for (id, _) in st.subs.drain(level + 1..) {
-                                ds.unsubscribe(id);
-                            }
-                            st.bound.truncate(level + 1);
-                            drop_reported(st)
-                        }
-                    }
-                }
-                _ => Vec::new(),
-            }
-        }
+        (Subject::Child { .. }, false) => relink(ds, me, st, level),
         _ => Vec::new(),
     }
 }
@@ -315,7 +338,9 @@ fn drop_reported(st: &mut State) -> Vec<PathEvent> {
     }
 }
 
-fn emit(me: &Arc<Mutex<State>>, events: Vec<PathEvent>) {
+/// Runs the callback for each event; one that panics is caught and counted, and the
+/// events after it are still delivered.
+fn emit(ds: &DataServer, me: &Arc<Mutex<State>>, events: Vec<PathEvent>) {
     if events.is_empty() {
         return;
     }
@@ -328,7 +353,9 @@ fn emit(me: &Arc<Mutex<State>>, events: Vec<PathEvent>) {
     };
     let mut cb = cb.lock();
     for e in &events {
-        cb(e);
+        if catch_unwind(AssertUnwindSafe(|| cb(e))).is_err() {
+            ds.stats().panics_caught.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        }
     }
 }
 

@@ -259,6 +259,7 @@ impl DataServer {
     /// already unlinked `guid` from its parent.
     fn kill_subtree(&self, guid: Guid) {
         let mut stack = vec![guid];
+        let mut orphans = Vec::new();
         let objects = self.inner.objects.pin();
         while let Some(g) = stack.pop() {
             let Some(o) = objects.get(&g).cloned() else { continue };
@@ -275,7 +276,16 @@ impl DataServer {
             os.methods.clear();
             drop(guard);
             objects.remove(&g);
-            self.inner.streams.forget(g);
+            orphans.extend(self.inner.streams.forget(g));
+        }
+        if !orphans.is_empty() {
+            // Associations of a deleted receiver object go too, once no lock is held.
+            let ds = self.clone();
+            self.inner.pool.submit(Box::new(move || {
+                for a in orphans {
+                    let _ = ds.delete_object(a);
+                }
+            }));
         }
     }
 

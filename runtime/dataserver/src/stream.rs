@@ -33,7 +33,13 @@ pub(crate) struct Streams {
     listeners: papaya::HashMap<Guid, Arc<Listener>, BuildIdHasher>,
     /// Association object → its listener.
     assocs: papaya::HashMap<Guid, Guid, BuildIdHasher>,
+    /// Receiver object → its receivers (one per listener it joined), so deleting it
+    /// releases senders blocked on its queues.
+    targets: Mutex<crate::hash::IdMap<Guid, Vec<Joined>>>,
 }
+
+/// A receiver and the listener it joined.
+type Joined = (Guid, Arc<Receiver>);
 
 #[derive(Default)]
 struct Listener {
@@ -49,6 +55,9 @@ struct Receiver {
     run_on: Target,
     queue: Mutex<RecvQueue>,
     room: Condvar,
+    /// The highest `dropped` count written to the association object: concurrent senders
+    /// write it in increasing order only.
+    published: Mutex<u64>,
 }
 
 #[derive(Default)]
@@ -57,12 +66,15 @@ struct RecvQueue {
     scheduled: bool,
     dropped: u64,
     closed: bool,
+    /// Closed because the receiver object was deleted (a sender waiting on it gets an error).
+    target_gone: bool,
 }
 
 impl Receiver {
-    fn close(&self) {
+    fn close(&self, target_gone: bool) {
         let mut q = self.queue.lock();
         q.closed = true;
+        q.target_gone |= target_gone;
         q.buf.clear();
         self.room.notify_all();
     }
@@ -70,23 +82,58 @@ impl Receiver {
 
 impl Streams {
     /// Called when an object is deleted: a deleted listener closes its receivers, a deleted
-    /// association leaves its listener.
-    pub(crate) fn forget(&self, guid: Guid) {
+    /// association leaves its listener, and a deleted receiver object closes its receivers
+    /// (releasing blocked senders) and returns their association objects, for the caller
+    /// to delete once it holds no lock.
+    pub(crate) fn forget(&self, guid: Guid) -> Vec<Guid> {
         if let Some(l) = self.listeners.pin().remove(&guid) {
-            for r in l.receivers.read().iter() {
-                r.close();
+            let rs = l.receivers.read().clone();
+            for r in &rs {
+                r.close(false);
             }
+            self.untarget(&rs);
         }
         if let Some(listener) = self.assocs.pin().remove(&guid)
             && let Some(l) = self.listeners.pin().get(listener)
         {
-            let mut rs = l.receivers.write();
-            rs.retain(|r| {
+            let mut left = Vec::new();
+            l.receivers.write().retain(|r| {
                 if r.assoc == guid {
-                    r.close();
+                    r.close(false);
+                    left.push(r.clone());
                 }
                 r.assoc != guid
             });
+            self.untarget(&left);
+        }
+        let gone = {
+            let mut targets = self.targets.lock();
+            if targets.is_empty() {
+                return Vec::new();
+            }
+            targets.remove(&guid).unwrap_or_default()
+        };
+        let mut orphans = Vec::new();
+        for (listener, r) in gone {
+            r.close(true);
+            if let Some(l) = self.listeners.pin().get(&listener) {
+                l.receivers.write().retain(|x| !Arc::ptr_eq(x, &r));
+            }
+            orphans.push(r.assoc);
+        }
+        orphans
+    }
+
+    /// Forgets closed receivers in the by-target index.
+    fn untarget(&self, closed: &[Arc<Receiver>]) {
+        let mut targets = self.targets.lock();
+        for r in closed {
+            if let Some(rs) = targets.get_mut(&r.target) {
+                rs.retain(|(_, x)| !Arc::ptr_eq(x, r));
+                if rs.is_empty() {
+                    targets.remove(&r.target);
+                }
+            }
         }
     }
 }
@@ -150,8 +197,16 @@ impl DataServer {
             run_on,
             queue: Mutex::default(),
             room: Condvar::new(),
+            published: Mutex::new(0),
         });
+        self.inner.streams.targets.lock().entry(receiver).or_default().push((listener, r.clone()));
         l.receivers.write().push(r);
+        if !self.exists(receiver) {
+            // Deleted while joining: undo, as the deletion would have.
+            let _ = self.delete_object(assoc);
+            self.inner.streams.forget(receiver);
+            return Err(DsError::NoSuchObject { object: ObjRef::unnamed(receiver) });
+        }
         self.inner.streams.assocs.pin().insert(assoc, listener);
         Ok(assoc)
     }
@@ -162,12 +217,16 @@ impl DataServer {
     }
 
     /// Sends one message to every receiver of a listener, in order; returns how many
-    /// receivers it was queued for.
+    /// receivers it was queued for. A `Block` receiver with a full queue makes the sender
+    /// wait; if that receiver object is deleted meanwhile, the sender is released, the
+    /// message still goes to the other receivers, and the result is `NoSuchObject` naming
+    /// the deleted receiver.
     pub fn send(&self, listener: Guid, args: Vec<Value>) -> Result<usize, DsError> {
         let l = self.listener(listener)?;
         let msg: Arc<[Value]> = args.into();
         let receivers = l.receivers.read().clone();
         let mut sent = 0;
+        let mut lost = None;
         for r in receivers {
             let mut q = r.queue.lock();
             let mut dropped = None;
@@ -182,6 +241,9 @@ impl DataServer {
                 }
             }
             if q.closed {
+                if q.target_gone {
+                    lost = Some(r.target);
+                }
                 continue;
             }
             q.buf.push_back(msg.clone());
@@ -194,10 +256,17 @@ impl DataServer {
             }
             drop(q);
             if let Some(n) = dropped {
-                let _ = self.set(r.assoc, "dropped", Value::Int(n as i64));
+                let mut published = r.published.lock();
+                if n > *published {
+                    *published = n;
+                    let _ = self.set(r.assoc, "dropped", Value::Int(n as i64));
+                }
             }
         }
-        Ok(sent)
+        match lost {
+            Some(target) => Err(DsError::NoSuchObject { object: ObjRef::unnamed(target) }),
+            None => Ok(sent),
+        }
     }
 
     fn drain_receiver(&self, r: Arc<Receiver>) {
