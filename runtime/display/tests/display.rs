@@ -213,14 +213,10 @@ fn a_click_on_a_transparent_hud_pixel_reaches_the_map_below() {
     let clicks = Arc::new(parking_lot::Mutex::new(Vec::new()));
     for (g, who) in [(map, "map"), (hud, "hud")] {
         let clicks = clicks.clone();
-        ds.publish_method_fn(
-            g,
-            pointer_spec(),
-            move |a| {
-                clicks.lock().push(format!("{who}:{}", a[0].as_str().unwrap()));
-                CallOutcome::Accepted(vec![])
-            },
-        )
+        ds.publish_method_fn(g, pointer_spec(), move |a| {
+            clicks.lock().push(format!("{who}:{}", a[0].as_str().unwrap()));
+            CallOutcome::Accepted(vec![])
+        })
         .unwrap();
     }
     frame(&ds, &mut d);

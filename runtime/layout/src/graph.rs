@@ -581,7 +581,6 @@ pub(crate) fn ensure_object(
     }
 }
 
-
 impl Shared {
     fn weak(self: &Arc<Self>) -> Weak<Shared> {
         Arc::downgrade(self)

@@ -17,7 +17,6 @@ pub const ROW: f32 = 26.0;
 pub const TITLE: f32 = 26.0;
 pub const WIDTH: f32 = 180.0;
 
-
 /// Closes the context menu, if one is open.
 pub fn close(ds: &DataServer) {
     if let Some(w) = ds.resolve(&["display", WINDOW]) {
