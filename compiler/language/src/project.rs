@@ -53,6 +53,16 @@ pub fn discover(layout: &str, loader: &dyn SourceLoader) -> Option<String> {
     None
 }
 
+/// The files a project's checks read: the profile and the schemas it names (those found).
+/// What a reloader watches besides the layout and its `use`s.
+pub fn files(profile: &str, loader: &dyn SourceLoader) -> Vec<String> {
+    let mut out = vec![profile.to_string()];
+    if let Ok(Ok(parsed)) = loader.read(profile).map(|t| toml::from_str::<ProfileFile>(&t)) {
+        out.extend(parsed.profile.schemas.iter().filter_map(|s| loader.resolve(profile, s)));
+    }
+    out
+}
+
 /// Reads and checks the profile at `path` (text already read); problems are reported.
 pub fn load(
     path: &str,

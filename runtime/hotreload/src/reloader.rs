@@ -141,47 +141,25 @@ impl Drop for Reloader {
     }
 }
 
-/// The layout file, everything it uses, and for a profile the profile and its schemas.
+/// The layout file, everything it uses, and its project's profile and schemas (the target
+/// itself when it is a profile, else the nearest `project.toml` above the layout).
 fn dependencies(target: &Path, bundle: &mocu_language::Bundle, index: usize) -> Vec<PathBuf> {
     let mut files = vec![target.to_path_buf()];
     for f in &bundle.layouts[index].program.files {
         files.push(PathBuf::from(f));
     }
-    if bundle.profile.is_some()
-        && let Some(dir) = target.parent()
-        && let Ok(text) = std::fs::read_to_string(target)
-        && let Ok(t) = text.parse::<toml_like::Table>()
-    {
-        for s in t.schemas {
-            files.push(dir.join(s));
-        }
+    let t = target.to_string_lossy().replace('\\', "/");
+    let profile = if bundle.profile.is_some() {
+        Some(t)
+    } else {
+        mocu_language::project::discover(&t, &FsLoader)
+    };
+    if let Some(p) = profile {
+        files.extend(mocu_language::project::files(&p, &FsLoader).into_iter().map(PathBuf::from));
     }
     files.sort();
     files.dedup();
     files
-}
-
-/// The few profile keys dependency tracking needs, read without a TOML dependency.
-mod toml_like {
-    pub struct Table {
-        pub schemas: Vec<String>,
-    }
-
-    impl std::str::FromStr for Table {
-        type Err = ();
-        fn from_str(s: &str) -> Result<Table, ()> {
-            let mut schemas = Vec::new();
-            for line in s.lines() {
-                let l = line.trim();
-                if let Some(rest) = l.strip_prefix("schemas") {
-                    for part in rest.split('"').skip(1).step_by(2) {
-                        schemas.push(part.to_string());
-                    }
-                }
-            }
-            Ok(Table { schemas })
-        }
-    }
 }
 
 fn publish_reload_method(inner: &Arc<Inner>) {

@@ -34,7 +34,11 @@ struct Rig {
 }
 
 fn rig(text: &str) -> Rig {
-    let dir = tempfile::tempdir().unwrap();
+    rig_in(tempfile::tempdir().unwrap(), text)
+}
+
+/// A rig whose layout `hud.mocu` is written in `dir` (which may hold its project).
+fn rig_in(dir: tempfile::TempDir, text: &str) -> Rig {
     let path = dir.path().join("hud.mocu");
     std::fs::write(&path, text).unwrap();
     let ds = DataServer::default();
@@ -265,4 +269,39 @@ fn a_burst_of_saves_through_the_watcher_settles_on_the_last_one() {
         r.frame() == (0, 255, 0) && r.width_of_a() == Some(Value::Float(120.0))
     });
     assert!(r.reloader.reloads() < 51, "bursts are coalesced: {} reloads", r.reloader.reloads());
+}
+
+#[test]
+fn a_schema_edit_is_hot_reloaded_even_from_a_multi_line_array_of_the_project() {
+    let dir = tempfile::tempdir().unwrap();
+    let profile =
+        "[profile]\nlayouts = []\nschemas = [\n  \"schemas/a.toml\",\n  \"schemas/usv.toml\",\n]\n";
+    std::fs::write(dir.path().join("project.toml"), profile).unwrap();
+    std::fs::create_dir(dir.path().join("schemas")).unwrap();
+    std::fs::write(dir.path().join("schemas/a.toml"), "[types.other]\n").unwrap();
+    let schema = |prop: &str| {
+        format!(
+            "[[instances]]\npath = \"root.vehicles.usv*\"\ntype = \"usv\"\n[types.usv.properties]\n{prop} = {{ type = \"float\" }}\n"
+        )
+    };
+    let usv = dir.path().join("schemas/usv.toml");
+    std::fs::write(&usv, schema("fuel")).unwrap();
+    let watch = "}\nwatch low { when root.vehicles.usv1.fuel < 0.2 then alert warning \"low\" ";
+    let r = rig_in(dir, &layout_text("#ff0000", 100, watch));
+    let files = r.reloader.files();
+    for f in ["project.toml", "a.toml", "usv.toml"] {
+        assert!(files.iter().any(|p| p.ends_with(f)), "{f} is followed: {files:?}");
+    }
+    r.reloader.watch().unwrap();
+    // The schema renames the property: the layout no longer checks, the banner says why.
+    std::fs::write(&usv, schema("fuel_level")).unwrap();
+    let mut r = r;
+    r.wait("the banner", |r| {
+        r.ds.resolve(&["operator", "diagnostics"])
+            .and_then(|d| r.ds.try_get(d, PropName::new("active")))
+            == Some(Value::Bool(true))
+    });
+    let d = r.ds.resolve(&["operator", "diagnostics"]).unwrap();
+    let shown = r.ds.get(d, "text").unwrap().to_string();
+    assert!(shown.contains("fuel"), "{shown}");
 }
