@@ -78,10 +78,13 @@ enum Wake {
     Stop,
 }
 
+/// What runs once the display exists.
+type Setup<'a> = Box<dyn FnOnce(&mut Display) + 'a>;
+
 struct App<'a> {
     ds: DataServer,
     opts: WindowOptions,
-    setup: Option<Box<dyn FnOnce(&mut Display) + 'a>>,
+    setup: Option<Setup<'a>>,
     proxy: EventLoopProxy<Wake>,
     window: Option<Arc<Window>>,
     display: Option<Display>,
