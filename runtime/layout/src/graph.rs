@@ -377,6 +377,10 @@ pub(crate) fn compile_widget(
             }
         }
     }
+    if let Some(stale) = crate::stale::widget_stale(&mut lw) {
+        outs.push(stale);
+        names.push("stale".into());
+    }
     let f = b.add(lw, outs);
     let mut handlers = Vec::new();
     for h in &w.handlers {

@@ -4,6 +4,7 @@
 //!   → the JIT's IR; each dotted path becomes an input slot.
 //! - [`graph`]: functions compiled together (Cranelift), cells binding them to shared path
 //!   subscriptions, evaluated once per tick with early cutoff; outputs under `root.display`.
+//! - `stale`: each widget's `stale` output, from the link state of the vehicles it reads.
 //! - `watch`: watches on delayed calls (hold, hysteresis, repeat, snooze).
 //! - `actions`: set / call / swap / show / hide / alert, with control feedback.
 //! - `alerts`: alerts and failed commands always reach the operator (world model, log,
@@ -24,6 +25,7 @@ pub use mocu_lower as lower;
 use mocu_lower::convert;
 mod menu;
 mod reload;
+mod stale;
 mod watch;
 
 pub use events::{EventSink, JsonlLog, MemorySink, NullSink};

@@ -407,3 +407,26 @@ fn a_level_triggered_watch_repeats_while_active_and_snooze_holds_it_off() {
     std::thread::sleep(Duration::from_millis(150));
     assert_eq!(sink.of("alert").len(), n, "cleared: repeats stop");
 }
+
+#[test]
+fn an_interpolated_label_shows_a_dash_for_each_absent_part_and_keeps_the_rest() {
+    for jit in [true, false] {
+        let ds = DataServer::default();
+        let p = program(
+            "use \"stdlib/gauges.mocu\"\nlet usv = root.vehicles.usv1\nwindow w { layer 1 rect 0 0 10 10 }\nin w {\n hdg: Label { at 0 0 text \"HDG {usv.nav.heading:03.0}° {usv.name}\" }\n sum: Label { at 0 20 text \"{usv.nav.heading + 1:.1}\" }\n}",
+        );
+        let layout = Layout::load(&ds, &p, config(jit), Arc::new(NullSink)).unwrap();
+        layout.settle();
+        let hdg = widget(&ds, "w", "hdg");
+        let sum = widget(&ds, "w", "sum");
+        assert_eq!(ds.get(hdg, "text").unwrap(), Value::str("HDG —° —"), "jit {jit}");
+        assert_eq!(ds.get(sum, "text").unwrap(), Value::str("—"), "jit {jit}");
+        let (_v, nav) = vehicle(&ds, "usv1");
+        layout.settle();
+        assert_eq!(ds.get(hdg, "text").unwrap(), Value::str("HDG —° usv1"), "jit {jit}");
+        ds.set(nav, "heading", Value::Float(7.4)).unwrap();
+        layout.settle();
+        assert_eq!(ds.get(hdg, "text").unwrap(), Value::str("HDG 007° usv1"), "jit {jit}");
+        assert_eq!(ds.get(sum, "text").unwrap(), Value::str("8.4"), "jit {jit}");
+    }
+}

@@ -105,3 +105,60 @@ pub fn draw_shapes(c: &mut dyn Canvas, shapes: &[ShapeOut], outs: &[Option<Value
         }
     }
 }
+
+/// The rectangle (component-local) that the shapes of one evaluated component cover, text
+/// included: what the stale veil must cover. `None` when nothing is drawn.
+pub fn extent(shapes: &[ShapeOut], outs: &[Option<Value>]) -> Option<Rect> {
+    let mut acc: Option<(f32, f32, f32, f32)> = None;
+    let mut add = |x0: f32, y0: f32, x1: f32, y1: f32| {
+        if !(x0.is_finite() && y0.is_finite() && x1.is_finite() && y1.is_finite()) {
+            return;
+        }
+        acc = Some(match acc {
+            None => (x0, y0, x1, y1),
+            Some((a, b, c, d)) => (a.min(x0), b.min(y0), c.max(x1), d.max(y1)),
+        });
+    };
+    for s in shapes {
+        let style = |name: &str| -> Option<&Value> {
+            s.styles.iter().find(|(n, _)| n == name).and_then(|(_, i)| outs[*i].as_ref())
+        };
+        if style("visible").and_then(Value::as_bool) == Some(false) {
+            continue;
+        }
+        let args = &outs[s.first..s.first + s.args];
+        let half = style("width").and_then(Value::as_f64).map_or(0.5, |w| w as f32 / 2.0);
+        let nums: Option<Vec<f32>> = args.iter().map(num).collect();
+        match (s.kind.as_str(), nums.as_deref()) {
+            ("rect" | "rounded" | "image", Some([x, y, w, h, ..])) => add(*x, *y, x + w, y + h),
+            ("circle" | "arc", Some([cx, cy, r, ..])) => {
+                add(cx - r - half, cy - r - half, cx + r + half, cy + r + half)
+            }
+            ("line", Some([x1, y1, x2, y2])) => {
+                add(x1.min(*x2) - half, y1.min(*y2) - half, x1.max(*x2) + half, y1.max(*y2) + half)
+            }
+            ("polyline", Some(pts)) => {
+                for p in pts.chunks_exact(2) {
+                    add(p[0] - half, p[1] - half, p[0] + half, p[1] + half);
+                }
+            }
+            ("text", _) => {
+                let (Some(x), Some(y)) = (num(&args[0]), num(&args[1])) else { continue };
+                let Some(text) = args.get(2).and_then(|v| v.as_ref()).map(|v| v.to_string()) else {
+                    continue;
+                };
+                let size = style("size").and_then(Value::as_f64).map_or(14.0, |s| s as f32);
+                let bold = style("font").and_then(Value::as_str) == Some("bold");
+                let w = mocu_display::measure_text(&text, size, bold).width;
+                let x0 = match style("align").and_then(Value::as_str) {
+                    Some("center") | Some("centre") => x - w / 2.0,
+                    Some("right") => x - w,
+                    _ => x,
+                };
+                add(x0, y - size * 0.65, x0 + w, y + size * 0.65);
+            }
+            _ => {}
+        }
+    }
+    acc.map(|(x0, y0, x1, y1)| Rect::new(x0, y0, x1 - x0, y1 - y0))
+}

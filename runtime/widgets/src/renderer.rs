@@ -6,10 +6,11 @@
 //! Every widget also shows, drawn generically around its component:
 //! - control feedback (`feedback` property): pending (amber), accepted (green, briefly),
 //!   refused / failed / timed out (red, with the reason beneath, for a few seconds);
-//! - staleness: a widget whose data parameters (its component's optional numbers and
-//!   booleans: `value`, `heading`, `pitch`, `state`…) have not changed for `stale_after` is
-//!   veiled and tagged STALE (a single delayed call per widget re-checks; idle displays stay
-//!   idle); absent data is the component's own "no data" look, not stale;
+//! - staleness: a widget whose `stale` property is true (the layout's compiled `stale`
+//!   output: a vehicle it reads from lost its link; see `mocu-layout`'s `stale.rs`) and that
+//!   shows data is veiled — everything it drew, read-outs outside its box included — and
+//!   tagged STALE inside the veil (never over a neighbour); absent data is the component's
+//!   own "no data" look, not stale. A value that merely did not change is never stale;
 //! - hover and press, for enabled widgets with a `press` method (buttons).
 //!
 //! Native widgets: `VehicleList` (every vehicle under `root.vehicles`, optionally of one
@@ -27,13 +28,15 @@ use mocu_display::{
 use mocu_value::{Guid, PropName, Value};
 use parking_lot::Mutex;
 use std::collections::HashMap;
-use std::sync::{Arc, Weak};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Settings of the renderer.
 #[derive(Clone, Debug)]
 pub struct RendererConfig {
-    /// A `value` unchanged for this long is shown stale.
+    /// No longer used: staleness is the widget's `stale` property, which the layout
+    /// computes from the link state of the vehicles it reads (docs/staleness.md). Kept so
+    /// that existing configurations still build.
     pub stale_after: Duration,
     /// How long an accepted call's green outline shows.
     pub accepted_for: Duration,
@@ -99,9 +102,7 @@ struct WidgetState {
     window: Guid,
     sub: SubscriptionId,
     bounds: Option<Rect>,
-    value_at: Option<Instant>,
     feedback_at: Option<Instant>,
-    stale_timer: bool,
     hover: bool,
     pressed: bool,
 }
@@ -256,9 +257,7 @@ impl Shared {
                         window,
                         sub,
                         bounds: None,
-                        value_at: None,
                         feedback_at: None,
-                        stale_timer: false,
                         hover: false,
                         pressed: false,
                     },
@@ -280,13 +279,10 @@ impl Shared {
         let Some(name) = n.property_name() else { return };
         let now = Instant::now();
         let bounds = widget_bounds(&self.ds, w);
-        let data = self.is_data(w, name.as_str());
         let old = {
             let mut st = self.state.lock();
             let Some(ws) = st.widgets.get_mut(&w) else { return };
-            if data {
-                ws.value_at = Some(now);
-            } else if name.as_str() == "feedback" {
+            if name.as_str() == "feedback" {
                 ws.feedback_at = Some(now);
             }
             std::mem::replace(&mut ws.bounds, bounds)
@@ -306,9 +302,6 @@ impl Shared {
         // Repaint the old and the new place (a moved widget), with room for the overlays.
         self.damage(window, old);
         self.damage(window, bounds);
-        if data {
-            self.arm_stale_timer(w, self.config.stale_after);
-        }
         if name.as_str() == "feedback" {
             let after =
                 self.config.accepted_for.max(self.config.refused_for) + Duration::from_millis(20);
@@ -321,51 +314,11 @@ impl Shared {
         }
     }
 
-    /// One delayed call per widget: when it fires, the widget is either stale now (repaint)
-    /// or was updated meanwhile (re-arm for the rest of the time).
-    fn arm_stale_timer(self: &Arc<Self>, w: Guid, after: Duration) {
-        {
-            let mut st = self.state.lock();
-            let Some(ws) = st.widgets.get_mut(&w) else { return };
-            if ws.stale_timer {
-                return;
-            }
-            ws.stale_timer = true;
-        }
-        let weak: Weak<Shared> = Arc::downgrade(self);
-        self.ds.run_after(after + Duration::from_millis(5), Some(&self.exec), move || {
-            let Some(sh) = weak.upgrade() else { return };
-            let (window, since) = {
-                let mut st = sh.state.lock();
-                let Some(ws) = st.widgets.get_mut(&w) else { return };
-                ws.stale_timer = false;
-                (ws.window, ws.value_at.map(|t| t.elapsed()))
-            };
-            match since {
-                Some(e) if e >= sh.config.stale_after => {
-                    sh.damage(window, widget_bounds(&sh.ds, w))
-                }
-                Some(e) => sh.arm_stale_timer(w, sh.config.stale_after - e),
-                None => {}
-            }
-        });
-    }
-
     fn damage(&self, window: Guid, r: Option<Rect>) {
         let _ = match r {
             Some(r) => invalidate_rect(&self.ds, window, inflate(r)),
             None => invalidate(&self.ds, window),
         };
-    }
-
-    /// Whether `prop` is one of the data parameters of widget `w`'s component.
-    fn is_data(&self, w: Guid, prop: &str) -> bool {
-        let comp = self.ds.try_get(w, PropName::new("component"));
-        let lib = self.lib.lock().clone();
-        match comp.as_ref().and_then(Value::as_str).and_then(|c| lib.components.get(c)) {
-            Some(c) => c.data.iter().any(|d| d == prop),
-            None => prop == "value",
-        }
     }
 
     fn data_props(&self, component: &str) -> Vec<String> {
@@ -673,15 +626,19 @@ impl Shared {
             c.save();
             c.translate(x, y);
             let lib = self.lib.lock().clone();
+            let mut drawn = bounds.map(|b| Rect::new(0.0, 0.0, b.w, b.h));
             if let Some(comp) = lib.components.get(component) {
                 let prop = |name: &str| props.get(name).cloned();
                 let outs = lib.evaluate(comp, &prop);
                 draw_shapes(c, &comp.shapes, &outs);
+                if let (Some(d), Some(e)) = (drawn, crate::draw::extent(&comp.shapes, &outs)) {
+                    drawn = Some(union(d, e));
+                }
             } else {
                 draw_native(c, &self.ds, component, &props, bounds);
             }
             let data = self.data_props(component);
-            self.overlays(c, w, &props, &data, bounds);
+            self.overlays(c, w, &props, &data, bounds, drawn);
             c.restore();
         }
     }
@@ -694,16 +651,17 @@ impl Shared {
         props: &HashMap<String, Value>,
         data: &[String],
         bounds: Option<Rect>,
+        drawn: Option<Rect>,
     ) {
         let Some(b) = bounds else { return };
         // Round widgets (dials, compasses, horizons) get round overlays.
         let radius = if (b.w - b.h).abs() < 1.0 && b.w >= 48.0 { b.w / 2.0 } else { 4.0 };
         let r = Rect::new(-2.0, -2.0, b.w + 4.0, b.h + 4.0);
-        let (hover, pressed, value_at, feedback_at) = {
+        let (hover, pressed, feedback_at) = {
             let st = self.state.lock();
             match st.widgets.get(&w) {
-                Some(ws) => (ws.hover, ws.pressed, ws.value_at, ws.feedback_at),
-                None => (false, false, None, None),
+                Some(ws) => (ws.hover, ws.pressed, ws.feedback_at),
+                None => (false, false, None),
             }
         };
         if pressed {
@@ -720,14 +678,9 @@ impl Shared {
             );
         }
         if data.iter().any(|d| props.contains_key(d))
-            && value_at.is_some_and(|t| t.elapsed() >= self.config.stale_after)
+            && props.get("stale").and_then(Value::as_bool) == Some(true)
         {
-            c.fill_rounded_rect(
-                Rect::new(0.0, 0.0, b.w, b.h),
-                radius,
-                &Brush::Solid(Color::rgba(8, 10, 14, 165)),
-            );
-            tag(c, "STALE", Point::new(b.w, -2.0), Color::rgb(0xf5, 0x9e, 0x0b), Align::Right);
+            stale_veil(c, b, drawn.unwrap_or(Rect::new(0.0, 0.0, b.w, b.h)), radius);
         }
         let state = props.get("feedback").and_then(Value::as_str).unwrap_or("");
         let age = feedback_at.map_or(Duration::MAX, |t| t.elapsed());
@@ -772,9 +725,50 @@ impl Shared {
     }
 }
 
-fn tag(c: &mut dyn Canvas, text: &str, at: Point, col: Color, align: Align) {
-    let style = TextStyle::new(10.0, col).align(align).baseline(Baseline::Bottom).bold();
-    c.draw_text(text, at, &style);
+/// The smallest rectangle holding both.
+fn union(a: Rect, b: Rect) -> Rect {
+    let (x0, y0) = (a.x.min(b.x), a.y.min(b.y));
+    let (x1, y1) = ((a.x + a.w).max(b.x + b.w), (a.y + a.h).max(b.y + b.h));
+    Rect::new(x0, y0, x1 - x0, y1 - y0)
+}
+
+/// The stale veil over everything a widget drew (`drawn`, widget-local; a round widget
+/// that drew nothing outside its box gets a round veil) and the STALE tag in its middle,
+/// inside the veil: it never covers a neighbour.
+fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32) {
+    let veil = Color::rgba(8, 10, 14, 170);
+    let inside = drawn.x >= -0.5
+        && drawn.y >= -0.5
+        && drawn.x + drawn.w <= b.w + 0.5
+        && drawn.y + drawn.h <= b.h + 0.5;
+    let area = if inside { Rect::new(0.0, 0.0, b.w, b.h) } else { drawn };
+    let r = if inside { radius } else { 4.0 };
+    c.fill_rounded_rect(
+        Rect::new(area.x - 1.0, area.y - 1.0, area.w + 2.0, area.h + 2.0),
+        r,
+        &Brush::Solid(veil),
+    );
+    // Where it hides the least: a short, wide widget's label (left), else high in the middle
+    // (the value read-outs sit low or right).
+    let size = if area.h >= 14.0 { 10.0 } else { (area.h - 2.0).max(7.0) };
+    let tw = mocu_display::measure_text("STALE", size, true).width;
+    let mid = if area.h < 48.0 && area.w >= tw + 12.0 {
+        Point::new(area.x + 6.0 + tw / 2.0, area.y + area.h / 2.0)
+    } else {
+        Point::new(area.x + area.w / 2.0, area.y + (area.h * 0.25).max(size))
+    };
+    if tw + 8.0 <= area.w {
+        c.fill_rounded_rect(
+            Rect::new(mid.x - tw / 2.0 - 4.0, mid.y - size * 0.75, tw + 8.0, size * 1.5),
+            3.0,
+            &Brush::Solid(Color::rgba(0, 0, 0, 200)),
+        );
+    }
+    let style = TextStyle::new(size, Color::rgb(0xf5, 0x9e, 0x0b))
+        .align(Align::Center)
+        .baseline(Baseline::Middle)
+        .bold();
+    c.draw_text("STALE", mid, &style);
 }
 
 fn enabled(ds: &DataServer, w: Guid) -> bool {

@@ -1,0 +1,91 @@
+//! Stale means old, not unchanged: a widget is stale while a vehicle it reads from says its
+//! data is old (`stale` / `link_lost`), whatever its values do.
+use mocu_dataserver::*;
+use mocu_layout::*;
+use std::sync::Arc;
+use std::time::Duration;
+
+fn program(text: &str) -> mocu_language::Program {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("test.mocu");
+    std::fs::write(&path, text).unwrap();
+    match mocu_language::load_target(&path) {
+        Ok((bundle, _)) => bundle.layouts.into_iter().next().unwrap().program,
+        Err(e) => panic!("layout does not check:\n{e}"),
+    }
+}
+
+fn config() -> LayoutConfig {
+    LayoutConfig { tick: Duration::from_millis(1), ..LayoutConfig::default() }
+}
+
+const STRIPS: &str = r#"
+use "stdlib/gauges.mocu"
+window hud { layer 10 rect 0 0 100% 100% }
+in hud {
+  speed: TextGauge { at 10 10 200 26  label "SPD"  value root.vehicles.usv1.nav.speed }
+  both: TextGauge { at 10 40 200 26  label "SUM"  value root.vehicles.usv1.nav.speed + root.vehicles.usv2.nav.speed }
+  fixed: TextGauge { at 10 70 200 26  label "K"  value 3 }
+}
+for each v in root.vehicles of type "usv" {
+  window strip { layer 20  rect 300 (10 + index * 40) 200 30 }
+  in strip { fuel: Bar { at 0 0 200 16  value v.fuel } }
+}
+"#;
+
+fn usv(ds: &DataServer, name: &str) -> (Guid, Guid) {
+    let vs = ds.resolve(&["vehicles"]).unwrap_or_else(|| {
+        ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap()
+    });
+    let v = ds.create_object(vs, ObjectInfo::new(name, "usv")).unwrap();
+    let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+    ds.set(v, "stale", Value::Bool(false)).unwrap();
+    ds.set(v, "link_lost", Value::Bool(false)).unwrap();
+    ds.set(v, "fuel", Value::Float(0.5)).unwrap();
+    ds.set(nav, "speed", Value::Float(0.0)).unwrap();
+    (v, nav)
+}
+
+fn stale(ds: &DataServer, path: &[&str]) -> Option<Value> {
+    ds.try_get(ds.resolve(path).expect("widget"), "stale".into())
+}
+
+#[test]
+fn a_stopped_vehicle_with_a_good_link_is_never_stale_and_a_lost_link_makes_its_widgets_stale() {
+    let ds = DataServer::default();
+    let layout = Layout::load(&ds, &program(STRIPS), config(), Arc::new(NullSink)).unwrap();
+    let (v1, nav1) = usv(&ds, "usv1");
+    let (v2, _) = usv(&ds, "usv2");
+    layout.settle();
+    for _ in 0..5 {
+        ds.set(nav1, "speed", Value::Float(0.0)).unwrap(); // the same value, again and again
+        layout.settle();
+    }
+    let speed = ["display", "hud", "speed"];
+    let both = ["display", "hud", "both"];
+    assert_eq!(stale(&ds, &speed), Some(Value::Bool(false)));
+    assert_eq!(stale(&ds, &["display", "hud", "fixed"]), None, "reads no vehicle");
+    ds.set(v2, "link_lost", Value::Bool(true)).unwrap();
+    layout.settle();
+    assert_eq!(stale(&ds, &speed), Some(Value::Bool(false)), "usv2's link is not usv1's");
+    assert_eq!(stale(&ds, &both), Some(Value::Bool(true)), "reads usv2 too");
+    ds.set(v1, "stale", Value::Bool(true)).unwrap();
+    layout.settle();
+    assert_eq!(stale(&ds, &speed), Some(Value::Bool(true)));
+    ds.set(v1, "stale", Value::Bool(false)).unwrap();
+    layout.settle();
+    assert_eq!(stale(&ds, &speed), Some(Value::Bool(false)), "fresh again when the link is back");
+}
+
+#[test]
+fn a_template_instance_is_stale_with_its_own_vehicle_only() {
+    let ds = DataServer::default();
+    let layout = Layout::load(&ds, &program(STRIPS), config(), Arc::new(NullSink)).unwrap();
+    let (_v1, _) = usv(&ds, "usv1");
+    let (v2, _) = usv(&ds, "usv2");
+    layout.settle();
+    ds.set(v2, "stale", Value::Bool(true)).unwrap();
+    layout.settle();
+    assert_eq!(stale(&ds, &["display", "strip@usv1", "fuel@usv1"]), Some(Value::Bool(false)));
+    assert_eq!(stale(&ds, &["display", "strip@usv2", "fuel@usv2"]), Some(Value::Bool(true)));
+}
