@@ -168,6 +168,7 @@ mod tests {
             })
             .unwrap();
             ready_tx.send(g).unwrap();
+            ds2.quiesce(); // the window manager knows the window before the first frame
             let inputs = Inputs { stop: &stop_rx, events: &ev_rx };
             run(
                 &mut d,
