@@ -40,47 +40,53 @@ pub struct CheckArgs {
 }
 
 pub fn main(args: CheckArgs) -> ExitCode {
-    let mut io_error = false;
+    // I/O and usage failures: printed on stderr, and in SARIF's `invocations`.
+    let mut failures: Vec<String> = Vec::new();
     let mut files: Vec<String> = Vec::new();
     for p in &args.paths {
         if p.is_dir() {
-            collect(p, &mut files);
+            let before = files.len();
+            collect(p, &mut std::collections::HashSet::new(), &mut files);
+            if files.len() == before {
+                failures.push(format!(
+                    "no layouts (.mocu) or profiles (.toml) in the folder `{}`",
+                    p.display()
+                ));
+            }
         } else if p.is_file() {
             files.push(slashed(p));
         } else {
-            eprintln!(
-                "error: cannot read `{}`: no such file or folder",
-                p.display()
-            );
-            io_error = true;
+            failures.push(format!("cannot read `{}`: no such file or folder", p.display()));
         }
     }
+    let mut sources = SourceMap::new();
+    let mut diags = mocu_language::Diagnostics::new();
     let mut texts = Vec::new();
     for f in files {
-        match std::fs::read_to_string(&f) {
-            Ok(t) => texts.push((f, t)),
-            Err(e) => {
-                eprintln!("error: cannot read `{f}`: {e}");
-                io_error = true;
+        match std::fs::read(&f) {
+            // Bytes in: a file that is not UTF-8 is a located finding (E0107), not an I/O error.
+            Ok(bytes) => {
+                if let Some(t) = mocu_language::lexer::decode(&f, bytes, &mut sources, &mut diags)
+                {
+                    texts.push((f, t));
+                }
             }
+            Err(e) => failures.push(format!("cannot read `{f}`: {e}")),
         }
     }
+    for f in &failures {
+        eprintln!("error: {f}");
+    }
+    let io_error = !failures.is_empty();
     // Layouts named by a profile in this run are checked through it (with its schemas) only.
     let mut covered = std::collections::HashSet::new();
     for (path, text) in &texts {
         if mocu_language::file_kind(path, text) == FileKind::Profile {
             if let Ok(p) = toml::from_str::<mocu_language::profile::ProfileFile>(text) {
-                covered.extend(
-                    p.profile
-                        .layouts
-                        .iter()
-                        .filter_map(|l| FsLoader.resolve(path, l)),
-                );
+                covered.extend(p.profile.layouts.iter().filter_map(|l| FsLoader.resolve(path, l)));
             }
         }
     }
-    let mut sources = SourceMap::new();
-    let mut diags = mocu_language::Diagnostics::new();
     let explicit = args.profile.as_deref().map(slashed);
     if let Some(p) = &explicit {
         if !Path::new(p).is_file() {
@@ -100,9 +106,7 @@ pub fn main(args: CheckArgs) -> ExitCode {
             mocu_language::check_path(&path, text, &FsLoader, &mut sources, &mut diags);
             continue;
         }
-        let profile = explicit
-            .clone()
-            .or_else(|| project::discover(&path, &FsLoader));
+        let profile = explicit.clone().or_else(|| project::discover(&path, &FsLoader));
         let project = match profile {
             Some(p) => projects
                 .entry(p.clone())
@@ -137,10 +141,17 @@ pub fn main(args: CheckArgs) -> ExitCode {
     let errors = diags.count(Severity::Error);
     let warnings = diags.count(Severity::Warning);
     let list = diags.into_vec();
+    let deny_warnings = args.deny.contains(&Deny::Warnings);
     let out = match args.format {
-        Format::Human => render::human(&sources, &list),
+        Format::Human => {
+            let options = render::HumanOptions { colour: colour_wanted(), deny_warnings };
+            render::human_with(&sources, &list, options)
+        }
         Format::Json => render::json(&sources, &list),
-        Format::Sarif => render::sarif(&sources, &list),
+        Format::Sarif => {
+            let base = std::env::current_dir().ok().map(|d| slashed(&d));
+            render::sarif_with(&sources, &list, &render::SarifOptions { base, failures })
+        }
     };
     if !out.is_empty() {
         use std::io::Write;
@@ -149,7 +160,7 @@ pub fn main(args: CheckArgs) -> ExitCode {
     }
     if io_error {
         ExitCode::from(2)
-    } else if errors > 0 || (warnings > 0 && args.deny.contains(&Deny::Warnings)) {
+    } else if errors > 0 || (warnings > 0 && deny_warnings) {
         ExitCode::from(1)
     } else {
         ExitCode::SUCCESS
@@ -161,21 +172,30 @@ fn slashed(p: &Path) -> String {
     s.strip_prefix("./").map(str::to_string).unwrap_or(s)
 }
 
+/// Colour on a terminal only, and never when `NO_COLOR` is set (no-color.org) or the terminal
+/// is dumb.
+fn colour_wanted() -> bool {
+    use std::io::IsTerminal;
+    std::io::stdout().is_terminal()
+        && std::env::var_os("NO_COLOR").is_none_or(|v| v.is_empty())
+        && std::env::var("TERM").map_or(true, |t| t != "dumb")
+}
+
 /// Every `.mocu` and `.toml` under `dir`, sorted; hidden folders and build outputs skipped.
-fn collect(dir: &Path, out: &mut Vec<String>) {
-    let Ok(rd) = std::fs::read_dir(dir) else {
+/// A folder already walked (through a symbolic link, or a link loop) is not walked again.
+fn collect(dir: &Path, seen: &mut std::collections::HashSet<PathBuf>, out: &mut Vec<String>) {
+    let Ok(real) = std::fs::canonicalize(dir) else { return };
+    if !seen.insert(real) {
         return;
-    };
+    }
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
     let mut entries: Vec<PathBuf> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
     entries.sort();
     for p in entries {
-        let name = p
-            .file_name()
-            .map(|n| n.to_string_lossy().to_string())
-            .unwrap_or_default();
+        let name = p.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
         if p.is_dir() {
             if !name.starts_with('.') && !name.starts_with("target") {
-                collect(&p, out);
+                collect(&p, seen, out);
             }
         } else if name.ends_with(".mocu") || name.ends_with(".toml") {
             out.push(slashed(&p));

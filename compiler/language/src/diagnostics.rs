@@ -29,6 +29,8 @@ pub struct Diagnostic {
     /// Text under the offending range (e.g. "this is a string"); optional.
     pub label: Option<String>,
     pub help: Option<String>,
+    /// Other places that explain this one (e.g. "first defined here").
+    pub related: Vec<(Span, String)>,
 }
 
 /// The sink every pass pushes into.
@@ -64,7 +66,15 @@ impl Diagnostics {
         span: Span,
         message: String,
     ) -> &mut Diagnostic {
-        self.items.push(Diagnostic { span, severity, code, message, label: None, help: None });
+        self.items.push(Diagnostic {
+            span,
+            severity,
+            code,
+            message,
+            label: None,
+            help: None,
+            related: Vec::new(),
+        });
         let last = self.items.len() - 1;
         &mut self.items[last]
     }
@@ -103,6 +113,11 @@ impl Diagnostic {
     }
     pub fn label(&mut self, label: impl Into<String>) -> &mut Diagnostic {
         self.label = Some(label.into());
+        self
+    }
+    /// Points at another place, with a note ("first defined here").
+    pub fn related(&mut self, span: Span, note: impl Into<String>) -> &mut Diagnostic {
+        self.related.push((span, note.into()));
         self
     }
     /// Adds "did you mean `x`?" when a close candidate exists.

@@ -140,7 +140,19 @@ pub struct Chunk {
 
 /// Cuts a file into top-level items (see the module comment). Comments, strings and
 /// whitespace between items belong to no chunk.
+///
+/// Items are cut by brace depth, never by indentation: a `let` or `window` at column 0 inside
+/// balanced braces (an unindented `for each` body) stays in its item. Only when some `{` is
+/// never closed is the file cut again at item keywords in column 0, to recover from it.
 pub fn split_items(text: &str) -> Vec<Chunk> {
+    let by_depth = split_at(text, false);
+    if by_depth.iter().all(|c| !matches!(c.kind, ChunkKind::Unclosed(_))) {
+        return by_depth;
+    }
+    split_at(text, true)
+}
+
+fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
     let bytes = text.as_bytes();
     let mut starts: Vec<usize> = Vec::new();
     let mut unclosed: Vec<Option<usize>> = Vec::new();
@@ -181,7 +193,10 @@ pub fn split_items(text: &str) -> Vec<Chunk> {
         let at_line_start = line_start;
         line_start = false;
         let column0 = i == 0 || bytes[i - 1] == b'\n';
-        if at_line_start && (depth_stack.is_empty() || column0) && starts_keyword(&bytes[i..]) {
+        if at_line_start
+            && (depth_stack.is_empty() || (column0_splits && column0))
+            && starts_keyword(&bytes[i..])
+        {
             if let Some(s) = stray_start.take() {
                 stray.push((s, trim_end(text, s, i)));
             }

@@ -25,8 +25,6 @@ pub fn collect_definitions(modules: &Modules, diags: &mut Diagnostics) -> Defini
                 return;
             }
             if let Some(first) = spans.get(&(kind, name.name.clone())) {
-                let f = *first;
-                let _ = f;
                 diags
                     .error(
                         codes::DUPLICATE,
@@ -34,6 +32,7 @@ pub fn collect_definitions(modules: &Modules, diags: &mut Diagnostics) -> Defini
                         format!("the {what} `{}` is defined twice", name.name),
                     )
                     .label("second definition")
+                    .related(*first, "first defined here")
                     .help("rename one of them; the first definition is used");
                 return;
             }

@@ -154,13 +154,43 @@ impl Resolver<'_, '_> {
                 (params, events)
             })
         } else {
-            self.diags
-                .error(codes::UNKNOWN_COMPONENT, w.component.span, format!("there is no component `{}`", w.component.name))
-                .suggest(&w.component.name, self.defs.visible_components(self.modules, m).iter().map(String::as_str))
-                .help.get_or_insert_with(|| "define it with `component`, or `use` the file that defines it (e.g. \"stdlib/gauges.mocu\")".into());
+            let d = self.diags.error(
+                codes::UNKNOWN_COMPONENT,
+                w.component.span,
+                format!("there is no component `{}`", w.component.name),
+            );
+            match stdlib_file_of(&w.component.name) {
+                Some(file) => {
+                    d.help(format!(
+                        "`{}` is in {file}: add `use \"{file}\"` at the top of the file",
+                        w.component.name
+                    ));
+                }
+                None => {
+                    let visible = self.defs.visible_components(self.modules, m);
+                    let names = visible
+                        .iter()
+                        .map(String::as_str)
+                        .chain(stdlib_components().map(|(_, c)| c));
+                    match crate::diagnostics::did_you_mean(&w.component.name, names) {
+                        Some(best) => match stdlib_file_of(&best).filter(|_| !visible.contains(&best)) {
+                            Some(file) => d.help(format!("did you mean `{best}` (in {file}: add `use \"{file}\"`)?")),
+                            None => d.help(format!("did you mean `{best}`?")),
+                        },
+                        None => d.help("define it with `component`, or `use` the file that defines it (e.g. \"stdlib/gauges.mocu\")"),
+                    };
+                }
+            }
             None
         };
         let mut arg_scope = scope.clone();
+        if signature.is_none() {
+            // Unknown component: its arguments may name each other (`alarm value > 35`); no
+            // follow-on "unknown name" for them.
+            for a in &w.args {
+                arg_scope = arg_scope.with(&a.name.name, None);
+            }
+        }
         if let Some((params, _)) = &signature {
             for (p, _) in params {
                 arg_scope = arg_scope.with(p, None);
@@ -545,4 +575,28 @@ impl Resolver<'_, '_> {
             }
         }
     }
+}
+
+/// The standard library, read at build time: which file defines which component.
+const STDLIB: &[(&str, &str)] = &[
+    ("stdlib/alerts.mocu", include_str!("../../../../stdlib/alerts.mocu")),
+    ("stdlib/controls.mocu", include_str!("../../../../stdlib/controls.mocu")),
+    ("stdlib/gauges.mocu", include_str!("../../../../stdlib/gauges.mocu")),
+    ("stdlib/theme.mocu", include_str!("../../../../stdlib/theme.mocu")),
+];
+
+/// Every (file, component) of the standard library.
+fn stdlib_components() -> impl Iterator<Item = (&'static str, &'static str)> {
+    STDLIB.iter().flat_map(|(file, text)| {
+        text.lines().filter_map(|l| l.strip_prefix("component ")).map(move |rest| {
+            let end = rest.find(|c: char| !(c.is_alphanumeric() || c == '_')).unwrap_or(rest.len());
+            (*file, &rest[..end])
+        })
+    })
+}
+
+/// The standard-library file that defines a component, for "`Button` is in
+/// stdlib/controls.mocu".
+fn stdlib_file_of(component: &str) -> Option<&'static str> {
+    stdlib_components().find(|(_, c)| *c == component).map(|(f, _)| f)
 }
