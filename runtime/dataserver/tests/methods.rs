@@ -2,7 +2,7 @@
 use mocu_dataserver::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 fn vehicle(ds: &DataServer) -> Guid {
     let v = ds.create_object(Guid::ROOT, ObjectInfo::new("usv1", "usv")).unwrap();
@@ -108,47 +108,67 @@ fn immediate_calls_run_on_the_callers_thread_and_queued_calls_do_not() {
     assert_ne!(ran[1], me);
 }
 
+fn manual() -> (DataServer, ManualClock) {
+    let clock = ManualClock::new();
+    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
+}
+
 #[test]
-fn a_delayed_call_runs_after_its_delay() {
-    let ds = DataServer::default();
+fn a_delayed_call_runs_after_its_delay_and_not_before() {
+    let (ds, clock) = manual();
     let v = vehicle(&ds);
-    let t0 = Instant::now();
-    let out = ds.call_wait(
+    let (tx, rx) = crossbeam_channel::unbounded();
+    ds.call(
         v,
         "arm",
         vec![Value::Bool(false)],
         Some(CallOptions::delayed(Duration::from_millis(60))),
+        move |out| tx.send(out).unwrap(),
     );
-    assert!(out.is_accepted());
-    assert!(t0.elapsed() >= Duration::from_millis(60));
+    clock.advance(Duration::from_millis(59));
+    ds.quiesce();
+    assert!(rx.try_recv().is_err(), "not before its delay");
+    clock.advance(Duration::from_millis(1));
+    ds.quiesce();
+    assert!(rx.try_recv().unwrap().is_accepted());
 }
 
 #[test]
 fn a_handler_may_answer_later_from_another_thread_or_time_out() {
-    let ds = DataServer::default();
+    let (ds, clock) = manual();
     let o = ds.create_object(Guid::ROOT, ObjectInfo::new("mav1", "uav")).unwrap();
-    // Answers after the vehicle "acknowledges", from a protocol thread.
+    // Answers when the vehicle "acknowledges", from a protocol thread; `arm(false)` is
+    // acknowledged only when the test says so.
+    let (ack_tx, ack) = crossbeam_channel::unbounded::<()>();
     ds.publish_method(
         o,
         MethodSpec::new("arm").param(ParamSpec::new("on", ValueKind::Bool)),
-        |call: Call| {
+        move |call: Call| {
             let on = call.args[0].as_bool().unwrap();
-            let responder = call.responder;
+            let (responder, ack) = (call.responder, ack.clone());
             std::thread::spawn(move || {
-                std::thread::sleep(Duration::from_millis(if on { 10 } else { 500 }));
-                responder.accept(vec![]);
+                if !on {
+                    let _ = ack.recv();
+                }
+                responder.accept(vec![])
             });
         },
     )
     .unwrap();
     assert!(ds.call_wait(o, "arm", vec![Value::Bool(true)], None).is_accepted());
-    let out = ds.call_wait(
+    let (tx, rx) = crossbeam_channel::unbounded();
+    ds.call(
         o,
         "arm",
         vec![Value::Bool(false)],
         Some(CallOptions::queued().timeout(Duration::from_millis(50))),
+        move |out| tx.send(out).unwrap(),
     );
-    assert_eq!(out, CallOutcome::TimedOut);
+    clock.advance(Duration::from_millis(50));
+    assert_eq!(rx.try_recv(), Ok(CallOutcome::TimedOut));
+    ack_tx.send(()).unwrap();
+    ds.quiesce();
+    assert!(rx.try_recv().is_err(), "the late acknowledgement answers nobody");
 }
 
 #[test]
@@ -177,17 +197,18 @@ fn periodic_work_rearms_a_delayed_call_without_a_thread_of_its_own() {
             ds.run_after(Duration::from_millis(5), Some(&ex), move || tick(d, e, n));
         }
     }
-    let ds = DataServer::default();
+    let (ds, clock) = manual();
     let ex = ds.serial_executor();
     let n = Arc::new(AtomicUsize::new(0));
     tick(ds.clone(), ex, n.clone());
-    let t0 = Instant::now();
-    while n.load(Ordering::SeqCst) < 5 {
-        assert!(t0.elapsed() < Duration::from_secs(10));
-        std::thread::sleep(Duration::from_millis(2));
+    for expected in 2..=5 {
+        ds.quiesce();
+        clock.advance(Duration::from_millis(5));
+        ds.quiesce();
+        assert_eq!(n.load(Ordering::SeqCst), expected);
     }
+    clock.advance(Duration::from_secs(60));
     ds.quiesce();
-    std::thread::sleep(Duration::from_millis(30));
     assert_eq!(n.load(Ordering::SeqCst), 5, "stops when no longer re-armed");
     assert_eq!(ds.pending_timers(), 0);
 }

@@ -2,7 +2,13 @@
 use mocu_dataserver::*;
 use std::sync::{Arc, Mutex};
 
-fn receiver(ds: &DataServer, name: &str, slow_ms: u64) -> (Guid, Arc<Mutex<Vec<i64>>>) {
+/// A receiver object with a `frame` method. `gate`: each message first waits for the gate
+/// (until its sender is dropped) — a receiver slower than its sender, without sleeping.
+fn receiver(
+    ds: &DataServer,
+    name: &str,
+    gate: Option<crossbeam_channel::Receiver<()>>,
+) -> (Guid, Arc<Mutex<Vec<i64>>>) {
     let o = ds.create_object(Guid::ROOT, ObjectInfo::new(name, "window")).unwrap();
     let got = Arc::new(Mutex::new(Vec::new()));
     let g = got.clone();
@@ -10,7 +16,9 @@ fn receiver(ds: &DataServer, name: &str, slow_ms: u64) -> (Guid, Arc<Mutex<Vec<i
         o,
         MethodSpec::new("frame").param(ParamSpec::new("n", ValueKind::Int)),
         move |args| {
-            std::thread::sleep(std::time::Duration::from_millis(slow_ms));
+            if let Some(gate) = &gate {
+                let _ = gate.recv();
+            }
             g.lock().unwrap().push(args[0].as_i64().unwrap());
             CallOutcome::Accepted(vec![])
         },
@@ -23,13 +31,22 @@ fn receiver(ds: &DataServer, name: &str, slow_ms: u64) -> (Guid, Arc<Mutex<Vec<i
 fn every_receiver_gets_every_message_in_order_with_block() {
     let ds = DataServer::default();
     let cam = ds.create_listener(Guid::ROOT, "drive").unwrap();
-    let (a, got_a) = receiver(&ds, "a", 0);
-    let (b, got_b) = receiver(&ds, "b", 1);
+    let (a, got_a) = receiver(&ds, "a", None);
+    // b takes one message per token: the sender must wait for it, many times.
+    let (tokens, gate) = crossbeam_channel::unbounded();
+    let (b, got_b) = receiver(&ds, "b", Some(gate));
     ds.join(cam, a, "frame", Overflow::Block, 4).unwrap();
     ds.join(cam, b, "frame", Overflow::Block, 4).unwrap();
+    let feeder = std::thread::spawn(move || {
+        for _ in 0..100 {
+            tokens.send(()).unwrap();
+            std::thread::yield_now();
+        }
+    });
     for i in 0..100 {
         assert_eq!(ds.send(cam, vec![Value::Int(i)]).unwrap(), 2);
     }
+    feeder.join().unwrap();
     ds.quiesce();
     let want: Vec<i64> = (0..100).collect();
     assert_eq!(*got_a.lock().unwrap(), want);
@@ -40,11 +57,14 @@ fn every_receiver_gets_every_message_in_order_with_block() {
 fn drop_oldest_keeps_the_newest_and_counts_the_dropped_in_a_property() {
     let ds = DataServer::default();
     let cam = ds.create_listener(Guid::ROOT, "drive").unwrap();
-    let (slow, got) = receiver(&ds, "video", 20);
+    // The display is held on its first frame while the camera sends 50.
+    let (hold, gate) = crossbeam_channel::unbounded::<()>();
+    let (slow, got) = receiver(&ds, "video", Some(gate));
     let assoc = ds.join(cam, slow, "frame", Overflow::DropOldest, 2).unwrap();
     for i in 0..50 {
         ds.send(cam, vec![Value::Int(i)]).unwrap();
     }
+    drop(hold);
     ds.quiesce();
     let got = got.lock().unwrap().clone();
     assert_eq!(*got.last().unwrap(), 49, "the newest frame is shown");
@@ -58,7 +78,7 @@ fn drop_oldest_keeps_the_newest_and_counts_the_dropped_in_a_property() {
 fn receivers_are_objects_under_the_listener_and_leaving_stops_delivery() {
     let ds = DataServer::default();
     let cam = ds.create_listener(Guid::ROOT, "drive").unwrap();
-    let (a, got) = receiver(&ds, "a", 0);
+    let (a, got) = receiver(&ds, "a", None);
     let assoc = ds.join(cam, a, "frame", Overflow::Block, 8).unwrap();
     assert_eq!(ds.children(cam).unwrap(), [assoc]);
     assert_eq!(ds.info(assoc).unwrap().kind.as_ref(), RECEIVER_TYPE);
@@ -75,7 +95,7 @@ fn receivers_are_objects_under_the_listener_and_leaving_stops_delivery() {
 fn a_deleted_receiver_leaves_its_listeners() {
     let ds = DataServer::default();
     let cam = ds.create_listener(Guid::ROOT, "drive").unwrap();
-    let (a, _got) = receiver(&ds, "a", 0);
+    let (a, _got) = receiver(&ds, "a", None);
     ds.join(cam, a, "frame", Overflow::Block, 8).unwrap();
     ds.delete_object(a).unwrap();
     ds.send(cam, vec![Value::Int(1)]).unwrap();

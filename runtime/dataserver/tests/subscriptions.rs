@@ -85,13 +85,16 @@ fn coalesced_changes_still_deliver_the_latest_value_in_change_order() {
     let held = gate.lock().unwrap();
     let log = Arc::new(Mutex::new(Vec::new()));
     let (g, l) = (gate.clone(), log.clone());
+    let (entered_tx, entered) = crossbeam_channel::unbounded();
     ds.subscribe(Topic::properties(o), move |n: &Notification| {
+        let _ = entered_tx.send(());
         drop(g.lock().unwrap());
         l.lock().unwrap().push((n.property_name().unwrap().to_string(), n.value().cloned()));
     })
     .unwrap();
     ds.set(o, "a", Value::Int(0)).unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(20)); // let delivery start and block
+    // Delivery has started and blocks at the gate.
+    entered.recv_timeout(std::time::Duration::from_secs(20)).expect("delivery starts");
     for i in 1..=1000 {
         ds.set(o, "a", Value::Int(i)).unwrap();
         if i == 500 {
@@ -174,7 +177,7 @@ fn nothing_arrives_after_unsubscribe_returns() {
     let (a, l) = (after.clone(), late.clone());
     let id = ds
         .subscribe(Topic::properties(o), move |_n: &Notification| {
-            std::thread::sleep(std::time::Duration::from_micros(50));
+            std::hint::black_box((0..2_000u64).sum::<u64>()); // a callback that takes a while
             if a.load(Ordering::SeqCst) {
                 l.fetch_add(1, Ordering::SeqCst);
             }
@@ -188,7 +191,10 @@ fn nothing_arrives_after_unsubscribe_returns() {
             }
         })
     };
-    std::thread::sleep(std::time::Duration::from_millis(5));
+    // Unsubscribe while the writer is still writing (or, at worst, right after).
+    while ds.get(o, "x").map_or(true, |v| v.as_i64() < Some(100)) && !writer.is_finished() {
+        std::thread::yield_now();
+    }
     ds.unsubscribe(id);
     after.store(true, Ordering::SeqCst);
     writer.join().unwrap();
@@ -267,16 +273,19 @@ fn a_slow_subscriber_does_not_block_writers_or_other_subscribers() {
     let held = gate.lock().unwrap();
     let g = gate.clone();
     ds.subscribe(Topic::properties(o), move |_n: &Notification| drop(g.lock().unwrap())).unwrap();
-    let (log, cb) = recorder();
-    ds.subscribe(Topic::properties(o), cb).unwrap();
+    // The fast subscriber reaches the last value while the slow one is still held.
+    let (tx, rx) = crossbeam_channel::unbounded();
+    ds.subscribe(Topic::properties(o), move |n: &Notification| {
+        if n.value() == Some(&Value::Int(99)) {
+            let _ = tx.send(());
+        }
+    })
+    .unwrap();
     for i in 0..100 {
         ds.set(o, "x", Value::Int(i)).unwrap(); // would hang here if writers waited
     }
-    let t0 = std::time::Instant::now();
-    while prop_events(&log).last().map(|e| e.2.clone()) != Some(Some(Value::Int(99))) {
-        assert!(t0.elapsed().as_secs() < 10, "fast subscriber starved by a slow one");
-        std::thread::yield_now();
-    }
+    rx.recv_timeout(std::time::Duration::from_secs(20))
+        .expect("fast subscriber starved by a slow one");
     drop(held);
     ds.quiesce();
 }
