@@ -15,12 +15,31 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 #[derive(Clone, Debug)]
 pub(crate) enum CompiledAction {
-    Set { base: Base, objects: Vec<String>, property: String, func: FnRef },
-    Call { base: Base, objects: Vec<String>, method: String, func: FnRef },
-    Swap { a: String, b: String, ms: f64 },
+    Set {
+        base: Base,
+        objects: Vec<String>,
+        property: String,
+        func: FnRef,
+    },
+    /// `objects[i]`: argument `i` is a bare path that may name an object (passed as its GUID).
+    Call {
+        base: Base,
+        objects: Vec<String>,
+        method: String,
+        func: FnRef,
+        args: Vec<ArgObject>,
+    },
+    Swap {
+        a: String,
+        b: String,
+        ms: f64,
+    },
     Show(String),
     Hide(String),
-    Alert { level: String, func: FnRef },
+    Alert {
+        level: String,
+        func: FnRef,
+    },
     Mode(String),
     Select(Select),
     /// Acknowledge every alert (the runtime's own Escape / `select` bindings).
@@ -59,11 +78,25 @@ pub(crate) fn compile_actions(
                     .pop()
                     .ok_or_else(|| LowerError(format!("`call {target}` names no method")))?;
                 let mut outs = Vec::new();
+                let mut arg_objects = Vec::new();
                 for a in args {
+                    arg_objects.push(arg_object(&mut lw, &a.expr)?);
                     let ty = value_ty(&a.expr.ty).unwrap_or(jit::Ty::Num);
-                    outs.push(lw.lower(&a.expr, ty)?);
+                    outs.push(match &arg_objects[arg_objects.len() - 1] {
+                        // An object has no value to compute: its GUID is looked up at the call.
+                        Some(_)
+                            if matches!(
+                                a.expr.ty.kind,
+                                mocu_language::types::TypeKind::Object { .. }
+                            ) =>
+                        {
+                            jit::Expr::Absent(jit::Ty::Num)
+                        }
+                        _ => lw.lower(&a.expr, ty)?,
+                    });
                 }
-                CompiledAction::Call { base, objects, method, func: b.add(lw, outs) }
+                let func = b.add(lw, outs);
+                CompiledAction::Call { base, objects, method, func, args: arg_objects }
             }
             Action::Swap { a, b: w, duration_ms, .. } => {
                 CompiledAction::Swap { a: a.clone(), b: w.clone(), ms: *duration_ms }
@@ -178,8 +211,15 @@ pub(crate) fn run_actions(
                     );
                 }
             }
-            CompiledAction::Call { base, objects, method, func } => {
-                let args = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input);
+            CompiledAction::Call { base, objects, method, func, args: arg_objects } => {
+                let mut args = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input);
+                for (a, o) in args.iter_mut().zip(arg_objects) {
+                    if let Some((b, names)) = o
+                        && let Some(g) = start(sh, b, cx).and_then(|s| resolve(&sh.ds, s, names))
+                    {
+                        *a = Some(Value::Guid(g));
+                    }
+                }
                 let text = format!("{}.{method}", target_text(sh, base, objects, cx));
                 sh.sink.record(
                     "action",
@@ -205,7 +245,7 @@ pub(crate) fn run_actions(
                     );
                     continue;
                 };
-                let args: Vec<Value> = args.into_iter().flatten().collect();
+                let args = fit_args(&sh.ds, obj, method, args.into_iter().flatten().collect());
                 sh.sink.record(
                     "call",
                     &[("target", Value::str(&text)), ("args", Value::list(args.clone()))],
@@ -267,6 +307,42 @@ pub(crate) fn run_actions(
         }
     }
     alerts
+}
+
+/// A call argument that is a bare path to an object, or to something only the world
+/// knows (`dynamic`): the object it names, if it names one when the call runs.
+pub(crate) type ArgObject = Option<(Base, Vec<String>)>;
+
+fn arg_object(lw: &mut Lowerer, e: &mocu_language::program::Expr) -> Result<ArgObject, LowerError> {
+    use mocu_language::types::TypeKind;
+    match (&e.node, &e.ty.kind) {
+        (mocu_language::program::Node::Path(p), TypeKind::Object { .. } | TypeKind::Dynamic) => {
+            Ok(Some(lw.path_names(p)?))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// The arguments as the method's parameters take them: the language's numbers are floats,
+/// so a whole number goes to an `int` parameter as an int (anything else is left for the
+/// DataServer to refuse with its reason).
+fn fit_args(
+    ds: &mocu_dataserver::DataServer,
+    obj: Guid,
+    method: &str,
+    mut args: Vec<Value>,
+) -> Vec<Value> {
+    let Ok(specs) = ds.methods(obj) else { return args };
+    let Some(spec) = specs.iter().find(|m| m.name.as_str() == method) else { return args };
+    for (a, p) in args.iter_mut().zip(spec.params.iter()) {
+        if let (Some(ValueKind::Int), Value::Float(f)) = (p.kind, &*a)
+            && f.fract() == 0.0
+            && f.abs() < 9.0e15
+        {
+            *a = Value::Int(*f as i64);
+        }
+    }
+    args
 }
 
 fn start(sh: &Shared, base: &Base, cx: ActionCtx) -> Option<Guid> {
