@@ -43,7 +43,7 @@ pub(crate) fn compile_watch(
         outs.push(lw.lower(&c.expr, jit::Ty::Bool).map_err(err)?);
     }
     let func = b.add(lw, outs);
-    let ms = |x: Option<f64>| x.filter(|m| *m > 0.0).map(|m| Duration::from_secs_f64(m / 1000.0));
+    let ms = |x: Option<f64>| x.filter(|m| *m > 0.0).map(millis);
     Ok(CompiledWatch {
         name: w.name.clone(),
         func,
@@ -212,7 +212,7 @@ fn schedule(sh: &Arc<Shared>, w: usize, generation: u64, after: Duration) {
 fn fire(sh: &Arc<Shared>, st: &mut State, w: usize) {
     let rt = &mut st.watches[w];
     if let Some(until) = rt.snoozed_until {
-        let now = Instant::now();
+        let now = sh.ds.now();
         if until > now {
             set_state(sh, rt, "snoozed");
             rt.generation += 1;
@@ -272,12 +272,26 @@ fn clear(sh: &Arc<Shared>, st: &mut State, w: usize) {
 fn snooze(sh: &Arc<Shared>, w: usize, ms: f64) {
     let mut st = sh.state.lock();
     let Some(rt) = st.watches.get_mut(w) else { return };
-    rt.snoozed_until = Some(Instant::now() + Duration::from_secs_f64(ms.max(0.0) / 1000.0));
+    let d = millis(ms);
+    let now = sh.ds.now();
+    rt.snoozed_until = Some(now.checked_add(d).or_else(|| now.checked_add(FOREVER)).unwrap_or(now));
     if rt.active && rt.repeat.is_some() {
         rt.generation += 1; // stops repeating until the snooze is over
         let generation = rt.generation;
-        schedule(sh, w, generation, Duration::from_secs_f64(ms.max(0.0) / 1000.0));
+        schedule(sh, w, generation, d);
     }
     set_state(sh, rt, "snoozed");
     sh.sink.record("watch", &[("name", Value::str(&rt.name)), ("state", Value::str("snoozed"))]);
+}
+
+/// How long "for ever" is when a snooze does not fit the clock (`snooze(inf)`).
+const FOREVER: Duration = Duration::from_secs(100 * 365 * 24 * 3600);
+
+/// Milliseconds as a duration, saturating: negative or NaN is zero, too large (infinity
+/// included) is `Duration::MAX` (the DataServer clamps such delays).
+fn millis(ms: f64) -> Duration {
+    if ms.is_nan() || ms <= 0.0 {
+        return Duration::ZERO;
+    }
+    Duration::try_from_secs_f64(ms / 1000.0).unwrap_or(Duration::MAX)
 }

@@ -116,7 +116,9 @@ fn removed_items_are_torn_down_with_their_subscriptions_and_added_ones_appear() 
 
 #[test]
 fn a_watch_that_did_not_change_keeps_its_hold_timer() {
-    let ds = DataServer::default();
+    // The server's clock is manual: the hold timer fires exactly when the test says.
+    let clock = ManualClock::new();
+    let ds = DataServer::with_clock(Config::default(), Arc::new(clock.clone()));
     let v = ds.create_object(Guid::ROOT, ObjectInfo::new("v", "usv")).unwrap();
     ds.set(v, "speed", Value::Float(5.0)).unwrap();
     let sink = Arc::new(MemorySink::default());
@@ -126,19 +128,18 @@ fn a_watch_that_did_not_change_keeps_its_hold_timer() {
     layout.settle();
     let watch = find(&ds, &["operator", "watches", "slow"]);
     assert_eq!(ds.get(watch, "state").unwrap(), Value::str("holding"));
-    std::thread::sleep(Duration::from_millis(400));
+    clock.advance(Duration::from_millis(400));
+    layout.settle();
     layout.reload(&program(&text.replace("rect 0 0 10 10", "rect 0 0 20 20"))).unwrap();
+    layout.settle();
     assert_eq!(find(&ds, &["operator", "watches", "slow"]), watch, "the watch was kept");
-    let t0 = std::time::Instant::now();
-    while sink.of("alert").is_empty() {
-        assert!(t0.elapsed() < Duration::from_secs(5));
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    // The original timer has about 200 ms left; a restarted one would need 600 ms.
-    assert!(
-        t0.elapsed() < Duration::from_millis(450),
-        "fired on the original timer, not a restarted one"
-    );
+    // The original timer has 200 ms left; a restarted one would need 600 ms.
+    clock.advance(Duration::from_millis(199));
+    layout.settle();
+    assert!(sink.of("alert").is_empty(), "not before the original 600 ms");
+    clock.advance(Duration::from_millis(1));
+    layout.settle();
+    assert!(!sink.of("alert").is_empty(), "fired on the original timer, not a restarted one");
 }
 
 #[test]
