@@ -84,7 +84,8 @@ pub fn plan(ds: &DataServer, b: Rect) -> Plan {
     if plan.unacknowledged == 0 {
         return plan;
     }
-    let w = MAX_W.min(b.w - 16.0).max(120.0);
+    // At most MAX_W, and no more than 60% of a wide screen: the rest stays in sight.
+    let w = MAX_W.min((b.w * 0.6).max(420.0)).min(b.w - 16.0).max(120.0);
     let x = (b.w - w) / 2.0;
     plan.head = Some(Rect::new(x, 6.0, w, HEAD - 4.0));
     let mut y = 6.0 + HEAD;

@@ -906,12 +906,18 @@ fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Re
         return;
     }
     let row_h = LIST_ROW;
-    let bar_w = ((b.w - 150.0) / 2.0 - 8.0).clamp(24.0, 90.0);
-    for (i, (v, info)) in vehicles.iter().enumerate() {
+    // Two labelled bars after the name and type, within the list's width.
+    let bar_w = ((b.w - 130.0 - 2.0 * 36.0 - 8.0) / 2.0).clamp(16.0, 90.0);
+    // The rows that fit; with more vehicles than that, the last row says how many are left.
+    let fit = (((b.h - LIST_TOP) / row_h).floor().max(0.0)) as usize;
+    let shown = if vehicles.len() > fit { fit.saturating_sub(1) } else { vehicles.len() };
+    if shown < vehicles.len() && fit > 0 {
+        let y = LIST_TOP + shown as f32 * row_h + row_h / 2.0;
+        let st = TextStyle::new(12.0, theme::TEXT).baseline(Baseline::Middle).bold();
+        c.draw_text(&format!("+{} more", vehicles.len() - shown), Point::new(26.0, y), &st);
+    }
+    for (i, (v, info)) in vehicles.iter().take(shown).enumerate() {
         let y = LIST_TOP + i as f32 * row_h + row_h / 2.0;
-        if y + row_h / 2.0 > b.h {
-            break;
-        }
         let num = |k: &str| ds.try_get(*v, PropName::new(k)).and_then(|x| x.as_f64());
         let flag = |k: &str| ds.try_get(*v, PropName::new(k)) == Some(Value::Bool(true));
         let lost = flag("link_lost") || flag("stale");

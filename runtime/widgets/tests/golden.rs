@@ -284,3 +284,49 @@ fn click_through_the_hud_reaches_the_map_and_opens_its_context_menu() {
     let nav = rig.ds.resolve(&["vehicles", "usv1", "nav"]).unwrap();
     assert_eq!(rig.ds.get(nav, "goal_throttle").unwrap(), Value::Float(0.0), "usv1 stopped");
 }
+
+/// Raises an alert as `mocu-layout` does (docs/display.md): what the alert layer reads.
+fn raise(ds: &DataServer, severity: &str, text: &str) {
+    use mocu_dataserver::ObjectInfo;
+    let child = |parent: Guid, name: &str| {
+        ds.find_child(parent, name)
+            .unwrap()
+            .unwrap_or_else(|| ds.create_object(parent, ObjectInfo::new(name, name)).unwrap())
+    };
+    let folder = child(child(Guid::ROOT, "operator"), "alerts");
+    let n = ds.children(folder).unwrap().len() + 1;
+    let a = ds.create_object(folder, ObjectInfo::new(&format!("alert{n}"), "alert")).unwrap();
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap();
+    ds.set(a, "severity", Value::str(severity)).unwrap();
+    ds.set(a, "time", Value::Float(now.as_secs_f64())).unwrap();
+    ds.set(a, "acknowledged", Value::Bool(false)).unwrap();
+    ds.set(a, "text", Value::str(text)).unwrap();
+    ds.set(folder, "raised", Value::Int(n as i64)).unwrap();
+    ds.set(folder, "unacknowledged", Value::Int(n as i64)).unwrap();
+}
+
+/// Every shipped layout at 800×480, 1280×720 and 1920×1080 with alerts raised (the
+/// built-in alert layer on top) and one vehicle's data stale (usv2; ugv1 in the handheld
+/// layout): nothing critical off-screen, strips and list within the screen.
+#[test]
+fn every_shipped_layout_at_three_screen_sizes_with_alerts_and_stale_data() {
+    let layouts = [
+        ("usv.mocu", "usv", "usv2"),
+        ("fig1-swap.mocu", "fig1", "usv2"),
+        ("fig2-handheld.mocu", "fig2", "ugv1"),
+        ("fig3-multi-usv.mocu", "fig3", "usv2"),
+    ];
+    for (file, name, stale) in layouts {
+        for size in [(800, 480), (1280, 720), (1920, 1080)] {
+            let (mut rig, _sim) = paper(file, size, 20.0);
+            raise(&rig.ds, "critical", "Link lost with usv2");
+            raise(&rig.ds, "warning", "usv1.start_engine: refused — engine already running");
+            raise(&rig.ds, "info", "Fuel low on usv3");
+            let v = rig.ds.resolve(&["vehicles", stale]).unwrap();
+            rig.ds.set(v, "stale", Value::Bool(true)).unwrap();
+            rig.ds.set(v, "link_lost", Value::Bool(true)).unwrap();
+            let f = rig.frame();
+            check_golden(&format!("screen_{name}_{}x{}", size.0, size.1), &f);
+        }
+    }
+}
