@@ -48,8 +48,10 @@ impl Easing {
     }
 }
 
-/// Where animations read the time: the real clock (and timers drive them), or a manual
-/// clock that tests advance (and call [`crate::Display::tick_animations`]).
+/// Where animations read the time: `Real` is the DataServer's clock (the system clock, or
+/// the `ManualClock` given to `DataServer::with_clock`) and the server's timers drive them;
+/// `Manual` is a clock of the display's own that tests advance (and call
+/// [`crate::Display::tick_animations`]).
 #[derive(Clone, Debug)]
 pub enum Clock {
     Real,
@@ -118,6 +120,14 @@ impl Animator {
         Arc::new(Animator { ds, clock, interval, state: Mutex::default() })
     }
 
+    /// The time animations run on (see [`Clock`]).
+    fn now(&self) -> Instant {
+        match &self.clock {
+            Clock::Real => self.ds.now(),
+            manual => manual.now(),
+        }
+    }
+
     /// The window's current rectangle as the world model has it.
     pub fn rect_of(&self, window: Guid) -> [f64; 4] {
         RECT.map(|p| self.ds.get(window, p).ok().and_then(|v| v.as_f64()).unwrap_or(0.0))
@@ -126,7 +136,7 @@ impl Animator {
     /// Animates `window` from where it is now to `to`. Replaces any animation of it.
     pub fn start(self: &Arc<Self>, window: Guid, to: [f64; 4], duration: Duration, easing: Easing) {
         let from = self.rect_of(window);
-        let start = self.clock.now();
+        let start = self.now();
         let schedule = {
             let mut st = self.state.lock();
             st.anims.retain(|a| a.window != window);
@@ -151,7 +161,7 @@ impl Animator {
         {
             let mut st = self.state.lock();
             st.zswaps.retain(|z| ![z.a, z.b].iter().any(|g| *g == a || *g == b));
-            st.zswaps.push(ZSwap { a, b, due: self.clock.now() + duration / 2 });
+            st.zswaps.push(ZSwap { a, b, due: self.now() + duration / 2 });
         }
         self.start(a, rb, duration, easing);
         self.start(b, ra, duration, easing);
@@ -174,7 +184,7 @@ impl Animator {
     /// Writes every animation's value for the clock's current time; drops finished ones.
     /// Returns whether any is still running.
     pub fn tick(&self) -> bool {
-        let now = self.clock.now();
+        let now = self.now();
         let mut writes = Vec::new();
         let mut zswaps = Vec::new();
         let running = {

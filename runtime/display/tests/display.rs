@@ -184,22 +184,29 @@ fn swap_animates_rectangles_with_easing() {
 
 #[test]
 fn swap_on_the_real_clock_runs_off_timers_and_stops() {
-    let ds = mocu_dataserver::DataServer::default();
+    // "Real" is the DataServer's clock; a manual one here, so the timers fire when told.
+    let clock = mocu_dataserver::ManualClock::new();
+    let ds = mocu_dataserver::DataServer::with_clock(
+        mocu_dataserver::Config::default(),
+        Arc::new(clock.clone()),
+    );
     let mut d = Display::new(&ds, DisplayOptions::new(200, 100)).unwrap();
     let a = window(&ds, &d, "a", "x", 0, Rect::new(0.0, 0.0, 100.0, 100.0));
     let b = window(&ds, &d, "b", "x", 0, Rect::new(100.0, 0.0, 100.0, 100.0));
     frame(&ds, &mut d);
-    let t = std::time::Instant::now();
     ds.call_wait(
         d.display_object(),
         "swap",
         vec![Value::str("a"), Value::str("b"), Value::Int(100)],
         None,
     );
-    assert!(t.elapsed() < Duration::from_millis(50), "the call does not wait for the animation");
+    // The clock has not moved: the call returned without waiting for the animation.
     assert!(d.animator().active() > 0);
-    std::thread::sleep(Duration::from_millis(400));
-    ds.quiesce();
+    assert!(ds.pending_timers() > 0, "the next step waits on a timer");
+    for _ in 0..100 {
+        clock.advance(Duration::from_millis(5));
+        ds.quiesce();
+    }
     assert_eq!(d.animator().active(), 0);
     assert_eq!(ds.pending_timers(), 0, "no timer left once done");
     assert_eq!(ds.get(a, "x").unwrap(), Value::Float(100.0));
@@ -279,10 +286,13 @@ fn nothing_changed_means_nothing_drawn() {
     // A write of an equal value is no change either.
     ds.set(w, "x", Value::Float(0.0)).unwrap();
     assert!(!frame(&ds, &mut d).drawn);
-    // The idle display sleeps instead of spinning.
-    assert!(!d.wait_for_change(Duration::from_millis(20)));
+    // Once every notification is delivered, the idle display has nothing to wake for
+    // (asked without waiting)...
+    ds.quiesce();
+    assert!(!d.wait_for_change(Duration::ZERO));
     invalidate(&ds, w).unwrap();
-    assert!(d.wait_for_change(Duration::from_secs(5)));
+    // ...and wakes on a change (a bounded wait on the change itself).
+    assert!(d.wait_for_change(Duration::from_secs(20)));
     let st = frame(&ds, &mut d);
     assert_eq!(&*st.repainted, &["w".into()] as &[Arc<str>]);
     assert_eq!(calls.load(Ordering::SeqCst), 2);
