@@ -28,6 +28,7 @@ pub mod project;
 pub mod render;
 pub mod schema;
 pub mod source;
+pub mod syntax_hints;
 pub mod types;
 
 pub use bundle::{Bundle, BundleError, Layout};

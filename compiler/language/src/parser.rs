@@ -38,7 +38,7 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
                 diags
                     .error(codes::STRAY_TEXT, Span::new(file, chunk.start, chunk.start + word.len()), format!("`{word}` is not the start of an item"))
                     .label("expected an item here")
-                    .help("a file is made of `use`, `let`, `window`, `in`, `component`, `bind`, `menu`, `watch` and `for each` items");
+                    .help(crate::syntax_hints::stray(word).unwrap_or_else(|| "a file is made of `use`, `let`, `window`, `in`, `component`, `bind`, `menu`, `watch` and `for each` items".into()));
             }
             ChunkKind::Unclosed(open) => {
                 diags
@@ -76,7 +76,7 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
                         }
                     }
                     Err(e) => {
-                        report_pest_error(file, chunk.start, src, &e, diags);
+                        report_pest_error(file, text, chunk.start, src, &e, diags);
                         items.extend(broken_let(file, text, &chunk));
                     }
                 }
@@ -300,6 +300,7 @@ fn starts_keyword(rest: &[u8]) -> bool {
 
 fn report_pest_error(
     file: FileId,
+    text: &str,
     offset: usize,
     src: &str,
     e: &pest::error::Error<Rule>,
@@ -316,13 +317,29 @@ fn report_pest_error(
         offset + pos,
         offset + pos + found.len().max(1).min(src.len().saturating_sub(pos).max(1)),
     );
-    let (message, help) = match &e.variant {
+    let (mut message, mut help) = match &e.variant {
         ErrorVariant::ParsingError { positives, .. } => describe_expected(positives, &found),
         ErrorVariant::CustomError { message } => (message.clone(), None),
     };
+    let before = &src[..pos.min(src.len())];
+    if let Some((m, h)) = crate::syntax_hints::hint(first_word(src), before, &found, &message) {
+        message = m.unwrap_or(message);
+        help = Some(h);
+    }
     let d = diags.error(codes::SYNTAX, span, message);
     if found.is_empty() {
         d.label("the item ends here");
+    }
+    if found == "}" {
+        if let Some(open) = crate::syntax_hints::opening_of(before) {
+            let line = text[..offset + open].matches('\n').count() + 1;
+            let head = before[..=open].rsplit('\n').next().unwrap_or("").trim();
+            let note = format!("this `}}` closes `{head}` from line {line}");
+            if d.help.is_none() {
+                d.help(note.clone());
+            }
+            d.label(note);
+        }
     }
     if let Some(h) = help {
         d.help(h);

@@ -7,7 +7,7 @@ use crate::ast::Item;
 use crate::codes;
 use crate::diagnostics::Diagnostics;
 use crate::parser;
-use crate::source::{SourceLoader, SourceMap};
+use crate::source::{SourceLoader, SourceMap, Span};
 
 /// Loads `path` (already resolved by the caller) and its uses. Module 0 is `path`.
 /// Returns `None` when `path` itself cannot be read (the caller reports that).
@@ -19,7 +19,7 @@ pub fn load_sources(
     diags: &mut Diagnostics,
 ) -> Modules {
     let mut modules: Modules = Vec::new();
-    let mut stack: Vec<usize> = Vec::new();
+    let mut stack: Vec<(usize, Option<Span>)> = Vec::new();
     load(path, text, loader, sources, diags, &mut modules, &mut stack);
     modules
 }
@@ -31,7 +31,8 @@ fn load(
     sources: &mut SourceMap,
     diags: &mut Diagnostics,
     modules: &mut Modules,
-    stack: &mut Vec<usize>,
+    // The files being loaded, each with the span of its `use` being followed.
+    stack: &mut Vec<(usize, Option<Span>)>,
 ) -> usize {
     let file = sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
     let ast = parser::parse(file, &text, diags);
@@ -42,7 +43,7 @@ fn load(
         .filter_map(|i| if let Item::Use(u) = i { Some(u.clone()) } else { None })
         .collect();
     modules.push(Module { file, path: path.to_string(), ast, uses: Vec::new() });
-    stack.push(id);
+    stack.push((id, None));
     let mut edges = Vec::new();
     for u in uses {
         let Some(target) = loader.resolve(path, &u.path) else {
@@ -52,16 +53,15 @@ fn load(
                 .help("a `use` path is relative to this file; `stdlib/…` also searches the standard library (docs/language.md, \"Files\")");
             continue;
         };
-        if let Some(pos) = stack.iter().position(|&m| modules[m].path == target) {
-            let chain: Vec<&str> = stack[pos..]
-                .iter()
-                .map(|&m| modules[m].path.as_str())
-                .chain([target.as_str()])
-                .collect();
-            diags
-                .error(codes::USE_CYCLE, u.span, format!("`use` cycle: {}", chain.join(" → ")))
-                .help("move the shared definitions into a third file that both use");
+        if let Some(pos) = stack.iter().position(|&(m, _)| modules[m].path == target) {
+            if let Some(top) = stack.last_mut() {
+                top.1 = Some(u.span);
+            }
+            report_cycle(&stack[pos..], modules, diags);
             continue;
+        }
+        if let Some(top) = stack.last_mut() {
+            top.1 = Some(u.span);
         }
         let existing = modules.iter().position(|m| m.path == target);
         let m = match existing {
@@ -83,4 +83,22 @@ fn load(
     stack.pop();
     modules[id].uses = edges;
     id
+}
+
+/// Reports a `use` cycle (the files on the stack from its first member, each with the span of
+/// its `use` of the next) once, whichever file of it is checked: at the `use` that leads into
+/// the file with the smallest path, the chain starting there.
+fn report_cycle(cycle: &[(usize, Option<Span>)], modules: &Modules, diags: &mut Diagnostics) {
+    let Some(first) = (0..cycle.len()).min_by_key(|&k| modules[cycle[k].0].path.as_str()) else {
+        return;
+    };
+    // The member before `first` (cyclically) holds the `use` that leads into it.
+    let into = (first + cycle.len() - 1) % cycle.len();
+    let Some(span) = cycle[into].1 else { return };
+    let chain: Vec<&str> = (0..=cycle.len())
+        .map(|k| modules[cycle[(first + k) % cycle.len()].0].path.as_str())
+        .collect();
+    diags
+        .error(codes::USE_CYCLE, span, format!("`use` cycle: {}", chain.join(" → ")))
+        .help("move the shared definitions into a third file that both use");
 }

@@ -1,0 +1,73 @@
+//! `cargo run --release -p mocu-language --example check_speed -- LINES`: checks the generated
+//! layout of benches/check.rs (LINES lines) and a byte scan of the same text, and prints the
+//! median time of each and the node count. Peak memory: run it under `/usr/bin/time -v`.
+//! (The criterion bench is `cargo bench --bench check`; this is the light, single-crate form.)
+use std::time::Instant;
+
+fn main() {
+    let lines: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10_000);
+    let text = generate(lines);
+    let loader = mocu_language::MemoryLoader::new()
+        .with("stdlib/gauges.mocu", include_str!("../../../stdlib/gauges.mocu"))
+        .with("stdlib/theme.mocu", include_str!("../../../stdlib/theme.mocu"));
+    let runs = if lines > 50_000 { 3 } else { 11 };
+    let mut scan = Vec::new();
+    let mut check = Vec::new();
+    for _ in 0..runs {
+        let t = Instant::now();
+        let n = text.bytes().fold(0usize, |a, b| a + usize::from(b == b'\n' || b == b'{'));
+        std::hint::black_box(n);
+        scan.push(t.elapsed().as_secs_f64() * 1e3);
+        let t = Instant::now();
+        let mut sources = mocu_language::SourceMap::new();
+        let mut diags = mocu_language::Diagnostics::new();
+        let b = mocu_language::check_path(
+            "bench.mocu",
+            text.clone(),
+            &loader,
+            &mut sources,
+            &mut diags,
+        );
+        check.push(t.elapsed().as_secs_f64() * 1e3);
+        assert!(!diags.has_errors(), "{:?}", diags.iter().next());
+        std::hint::black_box(b);
+    }
+    scan.sort_by(f64::total_cmp);
+    check.sort_by(f64::total_cmp);
+    println!(
+        "{lines} lines, {} bytes: byte scan {:.3} ms, check {:.1} ms (median of {runs}), ratio {:.0}x",
+        text.len(),
+        scan[runs / 2],
+        check[runs / 2],
+        check[runs / 2] / scan[runs / 2]
+    );
+}
+
+fn generate(lines: usize) -> String {
+    let mut s = String::from("use \"stdlib/gauges.mocu\"\nlet kn = 1.94384\n");
+    let mut i = 0;
+    let mut count = 2;
+    while count < lines {
+        let block = format!(
+            "let v{i} = root.vehicles.usv{i}\n\
+             window w{i} {{ layer {i}  rect 0 0 400 300  opacity 0.9 }}\n\
+             in w{i} {{\n\
+             \x20 speed{i}: Dial {{ at 10 10 100 100  value v{i}.nav.speed * kn  range 0 .. 40  alarm value > 35 }}\n\
+             \x20 fuel{i}: Bar {{ at 10 120 100 16  value v{i}.fuel ?? 0  warn value < 0.2 }}\n\
+             \x20 hdg{i}: Label {{ at 10 140  text \"HDG {{v{i}.nav.heading:03.0}}° {{v{i}.name ?? \"?\"}}\" }}\n\
+             }}\n\
+             component C{i}(value: number?, max: number = 1) {{\n\
+             \x20 let f = clamp((value ?? 0) / max, 0, 1)\n\
+             \x20 rounded 0 0 w h 3  fill #141c24  stroke #3a4a5a\n\
+             \x20 rect 1 1 ((w - 2) * f) (h - 2)  fill if f < 0.2 then #f59e0b else #22c55e\n\
+             }}\n\
+             watch low{i} {{ when v{i}.fuel < 0.15 for 5s then alert warning \"Fuel low on {{v{i}.name}}\" }}\n\
+             bind keyboard {{ key f{k} -> set v{i}.nav.goal_throttle = 10  call v{i}.stop() }}\n",
+            k = i % 12 + 1
+        );
+        count += block.lines().count();
+        s.push_str(&block);
+        i += 1;
+    }
+    s
+}
