@@ -133,19 +133,31 @@ impl Diagnostic {
     }
 }
 
-/// The closest candidate by edit distance, if close enough to be a likely typo.
+/// The closest candidate by edit distance, if close enough to be a likely typo. On a tie, a
+/// candidate the name is missing letters of wins (`armd` → `armed`, not `arm`): a dropped
+/// letter is the commoner slip.
 pub fn did_you_mean<'a>(
     name: &str,
     candidates: impl IntoIterator<Item = &'a str>,
 ) -> Option<String> {
     let limit = (name.chars().count() / 3).max(1);
+    let lower = name.to_lowercase();
     candidates
         .into_iter()
         .filter(|c| *c != name)
-        .map(|c| (levenshtein(&name.to_lowercase(), &c.to_lowercase()), c))
-        .filter(|(d, _)| *d <= limit)
+        .map(|c| {
+            let lc = c.to_lowercase();
+            (levenshtein(&lower, &lc), !is_subsequence(&lower, &lc), c)
+        })
+        .filter(|(d, _, _)| *d <= limit)
         .min()
-        .map(|(_, c)| c.to_string())
+        .map(|(_, _, c)| c.to_string())
+}
+
+/// Whether every character of `short` appears in `long`, in order.
+fn is_subsequence(short: &str, long: &str) -> bool {
+    let mut rest = long.chars();
+    short.chars().all(|c| rest.any(|l| l == c))
 }
 
 /// Optimal-string-alignment distance: edits, with a swap of neighbours counting as one.
