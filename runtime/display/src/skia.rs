@@ -9,6 +9,8 @@ use crate::image::Image;
 use crate::path::Path;
 use crate::pixel;
 use crate::text;
+
+mod analytic;
 use tiny_skia::{FillRule, Mask, Paint, Pixmap};
 
 #[derive(Clone, Copy, Debug)]
@@ -32,6 +34,10 @@ pub struct SkiaCanvas {
     state: State,
     stack: Vec<State>,
     mask: Option<(IRect, Mask)>,
+    /// The pixmap still holds a previous frame, to be cleared before anything draws on it
+    /// unless the first drawing covers every pixel with opaque paint (a chart's or a
+    /// camera's background): one memset of the layer saved.
+    stale: bool,
 }
 
 impl SkiaCanvas {
@@ -48,16 +54,33 @@ impl SkiaCanvas {
             state: State { transform: Transform::IDENTITY, clip: full },
             stack: Vec::new(),
             mask: None,
+            stale: false,
         }
     }
 
+    /// A canvas over a pixmap whose old content is to be discarded, as [`SkiaCanvas::new`]
+    /// over a transparent pixmap: the clearing happens before the first drawing, or not
+    /// at all when that drawing paints every pixel opaque.
+    pub fn reusing(pixmap: Pixmap, origin: (i32, i32), size: Size) -> SkiaCanvas {
+        SkiaCanvas { stale: true, ..SkiaCanvas::new(pixmap, origin, size) }
+    }
+
     /// Gives the pixmap back.
-    pub fn into_pixmap(self) -> Pixmap {
+    pub fn into_pixmap(mut self) -> Pixmap {
+        self.ready();
         self.pixmap
     }
 
-    pub fn pixmap(&self) -> &Pixmap {
+    pub fn pixmap(&mut self) -> &Pixmap {
+        self.ready();
         &self.pixmap
+    }
+
+    /// Clears a reused pixmap before the first drawing that needs it cleared.
+    fn ready(&mut self) {
+        if std::mem::take(&mut self.stale) {
+            self.pixmap.data_mut().fill(0);
+        }
     }
 
     /// User coordinates to pixmap pixels.
@@ -78,6 +101,7 @@ impl SkiaCanvas {
         if clip.is_empty() {
             return;
         }
+        self.ready();
         if clip == self.full() {
             return f(&mut self.pixmap, None);
         }
@@ -140,6 +164,11 @@ impl SkiaCanvas {
         let len2 = vx * vx + vy * vy;
         let lut = gradient_lut(stops);
         let opaque = lut.iter().all(|c| c[3] == 255);
+        if opaque && area == self.full() {
+            self.stale = false; // every pixel is overwritten
+        } else {
+            self.ready();
+        }
         let w = self.pixmap.width() as usize;
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         let t_at = |x: f32, y: f32| -> usize {
@@ -178,6 +207,7 @@ impl SkiaCanvas {
     /// Draws a shaped run with its top-left corner at pixmap pixel `(ox, oy)`: the run's
     /// cached coverage mask blended in one pass (glyph by glyph only for colour glyphs).
     fn blit_text(&mut self, run: &text::ShapedRun, ox: i32, oy: i32, color: Color) {
+        self.ready();
         let clip = self.state.clip;
         let pw = self.pixmap.width() as usize;
         let pre = pixel::premultiply(color);
@@ -280,296 +310,6 @@ fn path_bounds(p: &tiny_skia::Path) -> Rect {
     Rect::new(b.x(), b.y(), b.width(), b.height())
 }
 
-impl SkiaCanvas {
-    /// Circles and rings under a translate + uniform scale, with analytic coverage:
-    /// tiny-skia's supersampling rasteriser costs several times more for these, and
-    /// gauges are made of them. `None` when the transform does not allow it.
-    fn ring(&mut self, c: Point, r_out: f32, r_in: f32, color: Color) -> Option<()> {
-        let dev = self.device();
-        if !(dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6) {
-            return None;
-        }
-        let s = dev.sx;
-        let c = dev.apply(c);
-        let (ro, ri) = (r_out * s, (r_in * s).max(0.0));
-        if ro <= 0.0 || color.a == 0 {
-            return Some(());
-        }
-        let bbox = IRect::covering(Rect::new(
-            c.x - ro - 1.0,
-            c.y - ro - 1.0,
-            2.0 * ro + 2.0,
-            2.0 * ro + 2.0,
-        ))
-        .intersect(&self.state.clip);
-        if bbox.is_empty() {
-            return Some(());
-        }
-        let solid = pixel::premultiply(color);
-        let w = self.pixmap.width() as usize;
-        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
-        let cov = |r: f32, d: f32| (r - d + 0.5).clamp(0.0, 1.0);
-        for y in bbox.y..bbox.bottom() {
-            let dy = y as f32 + 0.5 - c.y;
-            let dy2 = dy * dy;
-            let outer2 = (ro + 0.5) * (ro + 0.5);
-            if dy2 >= outer2 {
-                continue;
-            }
-            let half = (outer2 - dy2).sqrt();
-            let x0 = ((c.x - half).floor() as i32).max(bbox.x);
-            let x1 = ((c.x + half).ceil() as i32).min(bbox.right());
-            // Half-chords (in pixel-centre distance) of: full coverage by the outer edge,
-            // the hollow inside the inner edge, and the inner edge's influence.
-            let chord = |r: f32| if r > 0.0 && r * r > dy2 { (r * r - dy2).sqrt() } else { -1.0 };
-            let h_solid = chord(ro - 0.5);
-            let h_hollow = if ri > 0.0 { chord(ri - 0.5) } else { -1.0 };
-            let h_inner = if ri > 0.0 { chord(ri + 0.5) } else { -1.0 };
-            let row = &mut px[y as usize * w..][..w];
-            let mut x = x0;
-            while x < x1 {
-                let dx = x as f32 + 0.5 - c.x;
-                let adx = dx.abs();
-                if adx < h_hollow {
-                    // Skip to the first pixel past the hollow.
-                    let next = (c.x + h_hollow - 0.5).floor() as i32 + 1;
-                    x = next.max(x + 1);
-                    continue;
-                }
-                let solid_at = |x: i32| {
-                    let adx = (x as f32 + 0.5 - c.x).abs();
-                    adx <= h_solid && adx >= h_inner
-                };
-                if solid_at(x) {
-                    // A run of fully covered pixels at once.
-                    let mut e = x + 1;
-                    while e < x1 && solid_at(e) {
-                        e += 1;
-                    }
-                    pixel::blend_span(&mut row[x as usize..e as usize], solid);
-                    x = e;
-                    continue;
-                }
-                let k = {
-                    let d = (dx * dx + dy2).sqrt();
-                    let v = cov(ro, d) - if ri > 0.0 { cov(ri, d) } else { 0.0 };
-                    (v * 255.0 + 0.5) as u32
-                };
-                pixel::over_coverage(&mut row[x as usize], solid, k.min(255) as u8);
-                x += 1;
-            }
-        }
-        Some(())
-    }
-}
-
-impl SkiaCanvas {
-    /// The uniform scale of the device transform when it is a translate + uniform
-    /// positive scale (the analytic rasterisers' precondition).
-    fn uniform_scale(&self) -> Option<f32> {
-        let dev = self.device();
-        (dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6).then_some(dev.sx)
-    }
-
-    /// Blends premultiplied `pre` at coverage `k` (0..=1) onto pixel `i` of the pixmap.
-    #[inline]
-    fn cover(px: &mut [[u8; 4]], i: usize, pre: [u8; 4], k: f32) {
-        pixel::over_coverage(&mut px[i], pre, (k * 255.0 + 0.5) as u8);
-    }
-
-    /// A stroked circular arc with analytic coverage (butt or round caps): the band
-    /// between two radii, cut by the two radial edges. Gauge scales are made of these;
-    /// tiny-skia strokes them by flattening and supersampling, several times slower.
-    fn arc_band(
-        &mut self,
-        c: Point,
-        radius: f32,
-        start: f32,
-        sweep: f32,
-        stroke: &Stroke,
-        color: Color,
-    ) -> Option<()> {
-        let s = self.uniform_scale()?;
-        if stroke.dash.is_some() || stroke.cap == LineCap::Square {
-            return None;
-        }
-        if color.a == 0 || sweep == 0.0 || stroke.width <= 0.0 {
-            return Some(());
-        }
-        if sweep.abs() >= std::f32::consts::TAU - 1e-4 {
-            return self.ring(c, radius + stroke.width / 2.0, radius - stroke.width / 2.0, color);
-        }
-        let (a0, sw) = if sweep < 0.0 { (start + sweep, -sweep) } else { (start, sweep) };
-        let a1 = a0 + sw;
-        let c = self.device().apply(c);
-        let hw = stroke.width * s / 2.0;
-        let rm = radius * s;
-        let (ro, ri) = (rm + hw, (rm - hw).max(0.0));
-        let round = stroke.cap == LineCap::Round;
-        let (u0, u1) = ((a0.cos(), a0.sin()), (a1.cos(), a1.sin()));
-        let caps = [(c.x + u0.0 * rm, c.y + u0.1 * rm), (c.x + u1.0 * rm, c.y + u1.1 * rm)];
-        let bbox = IRect::covering(Rect::new(
-            c.x - ro - 1.0,
-            c.y - ro - 1.0,
-            2.0 * ro + 2.0,
-            2.0 * ro + 2.0,
-        ))
-        .intersect(&self.state.clip);
-        if bbox.is_empty() {
-            return Some(());
-        }
-        let pre = pixel::premultiply(color);
-        let w = self.pixmap.width() as usize;
-        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
-        let cov = |r: f32, d: f32| (r - d + 0.5).clamp(0.0, 1.0);
-        let small = sw <= std::f32::consts::PI;
-        let outer2 = (ro + 0.5) * (ro + 0.5);
-        for y in bbox.y..bbox.bottom() {
-            let dy = y as f32 + 0.5 - c.y;
-            let dy2 = dy * dy;
-            if dy2 >= outer2 {
-                continue;
-            }
-            let half = (outer2 - dy2).sqrt();
-            let x0 = ((c.x - half).floor() as i32).max(bbox.x);
-            let x1 = ((c.x + half).ceil() as i32).min(bbox.right());
-            let hollow = if ri > 0.5 && (ri - 0.5) * (ri - 0.5) > dy2 {
-                ((ri - 0.5) * (ri - 0.5) - dy2).sqrt()
-            } else {
-                -1.0
-            };
-            let row = y as usize * w;
-            let mut x = x0;
-            while x < x1 {
-                let dx = x as f32 + 0.5 - c.x;
-                if dx.abs() < hollow {
-                    x = ((c.x + hollow - 0.5).floor() as i32 + 1).max(x + 1);
-                    continue;
-                }
-                let d = (dx * dx + dy2).sqrt();
-                let radial = cov(ro, d) - if ri > 0.0 { cov(ri, d) } else { 0.0 };
-                let mut k = 0.0f32;
-                if radial > 0.0 {
-                    // Signed distances to the start and end edges (lines through the centre).
-                    let e0 = (u0.0 * dy - u0.1 * dx + 0.5).clamp(0.0, 1.0);
-                    let e1 = (dx * u1.1 - dy * u1.0 + 0.5).clamp(0.0, 1.0);
-                    // At most half a turn the sector is the cone between both edges;
-                    // more, it is everything but the cone of the rest of the turn.
-                    let ang = if small { e0.min(e1) } else { e0.max(e1) };
-                    k = radial * ang;
-                }
-                if round && k < 1.0 {
-                    let reach = (hw + 0.5) * (hw + 0.5);
-                    for (cx, cy) in caps {
-                        let d2 = (x as f32 + 0.5 - cx).powi(2) + (dy + c.y - cy).powi(2);
-                        if d2 < reach {
-                            k = k.max(cov(hw, d2.sqrt()));
-                        }
-                    }
-                }
-                if k > 0.0 {
-                    Self::cover(px, row + x as usize, pre, k.min(1.0));
-                }
-                x += 1;
-            }
-        }
-        Some(())
-    }
-
-    /// Disjoint straight segments (each subpath one `move`+`line`), stroked with analytic
-    /// coverage: ticks, needles' lines, crosses, grid lines. `None` when the path or the
-    /// transform is not of that kind.
-    fn segments(&mut self, path: &Path, stroke: &Stroke, color: Color) -> Option<()> {
-        let s = self.uniform_scale()?;
-        if stroke.dash.is_some() {
-            return None;
-        }
-        let els = path.elements();
-        if els.is_empty() || !els.len().is_multiple_of(2) || els.len() > 512 {
-            return None;
-        }
-        let mut segs = Vec::with_capacity(els.len() / 2);
-        for pair in els.chunks_exact(2) {
-            match pair {
-                [crate::path::PathEl::MoveTo(a), crate::path::PathEl::LineTo(b)] => {
-                    segs.push((*a, *b))
-                }
-                _ => return None,
-            }
-        }
-        if color.a == 0 || stroke.width <= 0.0 {
-            return Some(());
-        }
-        let dev = self.device();
-        let hw = stroke.width * s / 2.0;
-        let pre = pixel::premultiply(color);
-        let clip = self.state.clip;
-        let w = self.pixmap.width() as usize;
-        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
-        for (a, b) in segs {
-            let (a, b) = (dev.apply(a), dev.apply(b));
-            let (vx, vy) = (b.x - a.x, b.y - a.y);
-            let len = (vx * vx + vy * vy).sqrt();
-            if len < 1e-4 {
-                continue;
-            }
-            let (ux, uy) = (vx / len, vy / len);
-            // Caps extend the segment: square by hw, round (as capsules) by hw.
-            let ext = match stroke.cap {
-                LineCap::Butt => 0.0,
-                LineCap::Square | LineCap::Round => hw,
-            };
-            let pad = hw + 1.0;
-            let bbox = IRect::covering(Rect::new(
-                a.x.min(b.x) - pad - ext,
-                a.y.min(b.y) - pad - ext,
-                vx.abs() + 2.0 * (pad + ext),
-                vy.abs() + 2.0 * (pad + ext),
-            ))
-            .intersect(&clip);
-            if bbox.is_empty() {
-                continue;
-            }
-            let thin = (2.0 * hw).min(1.0);
-            for y in bbox.y..bbox.bottom() {
-                let py = y as f32 + 0.5 - a.y;
-                // The columns near the line on this row.
-                let (xa, xb) = if uy.abs() > 1e-3 {
-                    let xc = a.x + py * ux / uy;
-                    let span = (pad + ext) / uy.abs();
-                    ((xc - span).floor() as i32, (xc + span).ceil() as i32)
-                } else {
-                    (bbox.x, bbox.right())
-                };
-                let row = y as usize * w;
-                for x in xa.max(bbox.x)..xb.min(bbox.right()) {
-                    let pxv = x as f32 + 0.5 - a.x;
-                    let along = pxv * ux + py * uy;
-                    let across = (pxv * uy - py * ux).abs();
-                    let k = match stroke.cap {
-                        LineCap::Round => {
-                            let t = along.clamp(0.0, len);
-                            let d = ((pxv - ux * t).powi(2) + (py - uy * t).powi(2)).sqrt();
-                            (hw + 0.5 - d).clamp(0.0, thin)
-                        }
-                        _ => {
-                            let ka = (along + ext + 0.5)
-                                .clamp(0.0, 1.0)
-                                .min((len + ext - along + 0.5).clamp(0.0, 1.0));
-                            let kp = (hw + 0.5 - across).clamp(0.0, thin);
-                            ka * kp
-                        }
-                    };
-                    if k > 0.0 {
-                        Self::cover(px, row + x as usize, pre, k);
-                    }
-                }
-            }
-        }
-        Some(())
-    }
-}
-
 impl Canvas for SkiaCanvas {
     fn fill_circle(&mut self, c: Point, radius: f32, color: Color) {
         if self.ring(c, radius, 0.0, color).is_none() {
@@ -640,17 +380,16 @@ impl Canvas for SkiaCanvas {
         if clip.is_empty() {
             return;
         }
-        let c = tiny_skia::Color::from_rgba8(color.r, color.g, color.b, color.a)
-            .premultiply()
-            .to_color_u8();
-        let px = [c.red(), c.green(), c.blue(), c.alpha()];
+        if clip == self.full() {
+            self.stale = false; // every pixel is overwritten
+        } else {
+            self.ready();
+        }
+        let px = pixel::premultiply(color);
         let w = self.pixmap.width() as usize;
-        let data = self.pixmap.data_mut();
+        let (data, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         for y in clip.y..clip.bottom() {
-            let row = &mut data[(y as usize * w + clip.x as usize) * 4..][..clip.w as usize * 4];
-            for p in row.chunks_exact_mut(4) {
-                p.copy_from_slice(&px);
-            }
+            data[y as usize * w + clip.x as usize..][..clip.w as usize].fill(px);
         }
     }
 

@@ -529,17 +529,16 @@ impl WindowManager {
                     (size.0, size.1, (-r.x, -r.y))
                 };
                 let pm = match layer.pixmap.take() {
-                    Some(mut pm) if pm.width() == pw && pm.height() == ph => {
-                        pm.data_mut().fill(0); // a memset; tiny-skia's fill goes pixel by pixel
-                        pm
-                    }
+                    // Cleared by the canvas before its first drawing, or not at all when
+                    // that drawing covers the layer opaquely.
+                    Some(pm) if pm.width() == pw && pm.height() == ph => pm,
                     _ => match Pixmap::new(pw, ph) {
                         Some(pm) => pm,
                         None => return,
                     },
                 };
                 layer.origin = origin;
-                SkiaCanvas::new(pm, origin, wsize)
+                SkiaCanvas::reusing(pm, origin, wsize)
             }
             Some(d) => {
                 let Some(pm) = &layer.pixmap else { return };
