@@ -78,6 +78,7 @@ pub fn compile_layout(
     // 5. Schema rules need complete, typed paths (after lets are inlined).
     check_schema::check_schema(&program, schema, diags);
     check_method_args::check_method_args(&program, schema, diags);
+    check_depth::check_depth(&program, diags);
     // 6. Warnings last: they only make sense on a program that resolved and typed.
     warn_unused::warn_unused(&modules, &used, diags);
     warn_outside_window::warn_outside_window(&program, config.screen, diags);

@@ -116,7 +116,8 @@ impl<'a> Lowerer<'a> {
     /// paths take the type their use needs).
     pub fn lower(&mut self, e: &Expr, want: jit::Ty) -> Result<jit::Expr, LowerError> {
         self.depth += 1;
-        if self.depth > 64 {
+        if self.depth as usize > mocu_language::passes::check_depth::MAX_DEPTH {
+            // `mocu check` reports this first (E0106, passes/check_depth.rs).
             return Err(LowerError("arguments refer to each other too deeply (a cycle?)".into()));
         }
         let r = self.lower_inner(e, want);
