@@ -330,3 +330,45 @@ fn every_shipped_layout_at_three_screen_sizes_with_alerts_and_stale_data() {
         }
     }
 }
+
+/// Fig. 3 with eight USVs on a 1280×720 screen: the strips that fit above the dial (the
+/// others hidden), the vehicle list ends with "+N more", nothing runs over the dial.
+#[test]
+fn fig3_with_eight_usvs_on_a_small_screen_overlaps_nothing() {
+    let size = (1280, 720);
+    let rig = Rig::new(&root().join("layouts/fig3-multi-usv.mocu"), size, steady());
+    let ctx = ModuleContext::detached("sim", rig.ds.clone());
+    let cfg =
+        SimConfig { seed: 7, usv: 8, appear_every: 0.0, autostart: true, ..SimConfig::default() };
+    let sim = Sim::new(ctx, cfg).unwrap();
+    for _ in 0..100 {
+        sim.step(0.05);
+    }
+    let mut rig = rig;
+    let f = rig.frame();
+    let dial_top = {
+        let d = rig.widget("overlay", "speed");
+        rig.ds.get(d, "y").unwrap().as_f64().unwrap()
+    };
+    let display = rig.ds.resolve(&["display"]).unwrap();
+    let mut shown = 0;
+    for w in rig.ds.children(display).unwrap() {
+        let info = rig.ds.info(w).unwrap();
+        if !info.name.starts_with("strip@") {
+            continue;
+        }
+        let visible = rig.ds.get(w, "visible").unwrap() == Value::Bool(true);
+        let bottom = rig.ds.get(w, "y").unwrap().as_f64().unwrap()
+            + rig.ds.get(w, "h").unwrap().as_f64().unwrap();
+        if visible {
+            shown += 1;
+            assert!(
+                bottom <= dial_top,
+                "{} ends at {bottom}, the dial starts at {dial_top}",
+                info.name
+            );
+        }
+    }
+    assert!((1..8).contains(&shown), "{shown} strips shown");
+    check_golden("fig3_eight_usvs_1280x720", &f);
+}
