@@ -137,10 +137,15 @@ pub fn primitive(name: &str) -> Option<&'static PrimitiveDef> {
     PRIMITIVES.iter().find(|p| p.name == name)
 }
 
+/// Every style name (one spelling: `colour`, as in the type name; `color` is refused with a
+/// did-you-mean).
+pub const STYLES: &[&str] =
+    &["fill", "stroke", "colour", "width", "size", "opacity", "align", "font", "visible"];
+
 /// Styles a primitive accepts, with their types.
 pub fn style_type(name: &str) -> Option<Type> {
     Some(match name {
-        "fill" | "stroke" | "color" | "colour" => Type::COLOUR,
+        "fill" | "stroke" | "colour" => Type::COLOUR,
         "width" | "size" | "opacity" => Type::number(),
         "align" | "font" => Type::STRING,
         "visible" => Type::BOOL,

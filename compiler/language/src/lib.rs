@@ -17,6 +17,7 @@ pub mod builtins;
 pub mod bundle;
 pub mod codes;
 pub mod diagnostics;
+pub mod docgen;
 pub mod fs;
 pub mod lexer;
 pub mod modules;

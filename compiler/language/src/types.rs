@@ -104,14 +104,14 @@ impl Type {
             (a, b) => std::mem::discriminant(a) == std::mem::discriminant(b),
         }
     }
-    /// Parses a parameter type name: number, bool, string, colour (or color), duration, range,
+    /// Parses a parameter type name: number, bool, string, colour, duration, range,
     /// object.
     pub fn parse_name(name: &str) -> Option<Type> {
         Some(Type::new(match name {
             "number" => TypeKind::Number { unit: None },
             "bool" => TypeKind::Bool,
             "string" => TypeKind::String,
-            "colour" | "color" => TypeKind::Colour,
+            "colour" => TypeKind::Colour,
             "duration" => TypeKind::Duration,
             "range" => TypeKind::Range { unit: None },
             "object" => TypeKind::Object { object_type: None },

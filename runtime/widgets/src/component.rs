@@ -78,7 +78,7 @@ impl Library {
 /// The type a style has (the checker knows it; lowering needs it for dynamic values).
 fn style_ty(name: &str) -> jit::Ty {
     match name {
-        "fill" | "stroke" | "color" | "colour" => jit::Ty::Color,
+        "fill" | "stroke" | "colour" => jit::Ty::Color,
         "align" | "font" => jit::Ty::Str,
         "visible" => jit::Ty::Bool,
         _ => jit::Ty::Num,

@@ -35,7 +35,7 @@ pub fn draw_shapes(c: &mut dyn Canvas, shapes: &[ShapeOut], outs: &[Option<Value
         let args = &outs[s.first..s.first + s.args];
         let width = style("width").and_then(Value::as_f64).map_or(1.0, |w| w as f32);
         let fill = paint("fill");
-        let stroke = paint("stroke").or_else(|| paint("color").filter(|_| s.kind != "text"));
+        let stroke = paint("stroke").or_else(|| paint("colour").filter(|_| s.kind != "text"));
         let nums: Option<Vec<f32>> = args.iter().map(num).collect();
         let path = match (s.kind.as_str(), nums.as_deref()) {
             ("rect", Some([x, y, w, h])) => {
@@ -80,7 +80,7 @@ pub fn draw_shapes(c: &mut dyn Canvas, shapes: &[ShapeOut], outs: &[Option<Value
                     continue;
                 };
                 let size = style("size").and_then(Value::as_f64).map_or(14.0, |s| s as f32);
-                let col = paint("color").or(paint("fill")).unwrap_or(Color::rgb(0xe8, 0xf0, 0xf8));
+                let col = paint("colour").or(paint("fill")).unwrap_or(Color::rgb(0xe8, 0xf0, 0xf8));
                 let align = match style("align").and_then(Value::as_str) {
                     Some("center") | Some("centre") => Align::Center,
                     Some("right") => Align::Right,

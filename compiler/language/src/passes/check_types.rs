@@ -567,11 +567,13 @@ impl Typer<'_, '_> {
         let mut styles = Vec::new();
         for st in &p.styles {
             let Some(want) = builtins::style_type(&st.name.name) else {
-                self.diags.error(
-                    codes::UNKNOWN_PRIMITIVE,
-                    st.name.span,
-                    format!("unknown style `{}`", st.name.name),
-                );
+                self.diags
+                    .error(
+                        codes::UNKNOWN_PRIMITIVE,
+                        st.name.span,
+                        format!("unknown style `{}`", st.name.name),
+                    )
+                    .suggest(&st.name.name, builtins::STYLES.iter().copied());
                 continue;
             };
             let v = if want.kind == TypeKind::Bool {
