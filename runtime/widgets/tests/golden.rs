@@ -372,3 +372,44 @@ fn fig3_with_eight_usvs_on_a_small_screen_overlaps_nothing() {
     assert!((1..8).contains(&shown), "{shown} strips shown");
     check_golden("fig3_eight_usvs_1280x720", &f);
 }
+
+/// The built-in alert layer takes the pointer only where it draws: a press on a row
+/// acknowledges that alert, on the count line all of them; the layer then draws nothing
+/// and a press there reaches the window below.
+#[test]
+fn pressing_an_alert_row_acknowledges_it_and_the_count_line_acknowledges_all() {
+    let (mut rig, _sim) = paper("usv.mocu", (1280, 720), 1.0);
+    // Two refused commands (the engine runs already): alerts raised by the layout.
+    let engine = rig.widget("hud", "engine");
+    for _ in 0..2 {
+        rig.ds.call_wait(engine, "press", vec![], None);
+        rig.frame();
+    }
+    let layer = rig.ds.resolve(&["display", "alert_layer"]).expect("the built-in alert layer");
+    let ds = rig.ds.clone();
+    let n = |k: &str| ds.get(layer, k).unwrap().as_f64().unwrap() as f32;
+    let plan =
+        mocu_widgets::alerts::plan(&rig.ds, mocu_display::Rect::new(0.0, 0.0, n("w"), n("h")));
+    assert_eq!(plan.unacknowledged, 2);
+    let (first, r) = plan.rows[0].clone();
+    assert_eq!(first.severity, "warning");
+    assert!(first.text.contains("refused"), "{}", first.text);
+    let (x, y) = (n("x") + r.x + r.w / 2.0, n("y") + r.y + r.h / 2.0);
+    assert_eq!(rig.display.hit_test(x, y).map(|h| h.window), Some(layer));
+    rig.display.pointer(x, y, PointerEvent::Down(0));
+    rig.display.pointer(x, y, PointerEvent::Up(0));
+    rig.frame();
+    assert_eq!(rig.ds.get(first.object, "acknowledged").unwrap(), Value::Bool(true));
+    let head = plan.head.unwrap();
+    let (hx, hy) = (n("x") + head.x + 40.0, n("y") + head.y + head.h / 2.0);
+    rig.display.pointer(hx, hy, PointerEvent::Down(0));
+    rig.display.pointer(hx, hy, PointerEvent::Up(0));
+    rig.frame();
+    let folder = rig.ds.resolve(&["operator", "alerts"]).unwrap();
+    assert_eq!(rig.ds.get(folder, "unacknowledged").unwrap(), Value::Int(0));
+    assert_ne!(
+        rig.display.hit_test(x, y).map(|h| h.window),
+        Some(layer),
+        "nothing drawn there now"
+    );
+}
