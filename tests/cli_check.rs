@@ -245,3 +245,22 @@ fn the_shipped_profile_sets_only_settings_its_modules_accept() {
     let shipped = mocu(&["check", "--deny", "warnings", "layouts/project.toml"]);
     assert_eq!(shipped.status.code(), Some(0), "{}", stdout(&shipped));
 }
+
+#[test]
+fn the_tutorials_whole_file_checks_clean_in_the_shipped_project() {
+    let doc = std::fs::read_to_string("docs/tutorial.md").expect("docs/tutorial.md");
+    let at = doc.find("## The whole file").expect("the tutorial ends with the whole file");
+    let start = doc[at..].find("```mocu\n").expect("a mocu block") + at + 8;
+    let end = doc[start..].find("```").expect("closed") + start;
+    let p = project_dir("tutorial", &[("my.mocu", &doc[start..end])]).join("my.mocu");
+    let o = mocu(&[
+        "check",
+        "--deny",
+        "warnings",
+        "--profile",
+        "layouts/project.toml",
+        p.to_str().expect("utf-8"),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stdout(&o));
+    assert!(!doc[start..end].contains("?? 0"), "the tutorial advises against false zeros");
+}
