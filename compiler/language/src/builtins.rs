@@ -205,8 +205,11 @@ pub fn window_prop_type(name: &str) -> Option<Type> {
 }
 pub const WINDOW_PROPS: &[&str] = &["layer", "opacity", "visible", "type", "source"];
 
+/// A binding kind of a device and its input names.
+pub type BindingKind = (&'static str, &'static [&'static str]);
+
 /// Input devices, their binding kinds and input names. Keys are checked by [`is_key`].
-pub const DEVICES: &[(&str, &[(&str, &[&str])])] = &[
+pub const DEVICES: &[(&str, &[BindingKind])] = &[
     (
         "gamepad",
         &[

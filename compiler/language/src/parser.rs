@@ -205,10 +205,8 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
             }
             depth_stack.clear();
             starts.push(i);
-        } else if starts.is_empty() {
-            if stray_start.is_none() {
-                stray_start = Some(i);
-            }
+        } else if starts.is_empty() && stray_start.is_none() {
+            stray_start = Some(i);
         }
         match b {
             b'"' => {
@@ -330,16 +328,16 @@ fn report_pest_error(
     if found.is_empty() {
         d.label("the item ends here");
     }
-    if found == "}" {
-        if let Some(open) = crate::syntax_hints::opening_of(before) {
-            let line = text[..offset + open].matches('\n').count() + 1;
-            let head = before[..=open].rsplit('\n').next().unwrap_or("").trim();
-            let note = format!("this `}}` closes `{head}` from line {line}");
-            if d.help.is_none() {
-                d.help(note.clone());
-            }
-            d.label(note);
+    if found == "}"
+        && let Some(open) = crate::syntax_hints::opening_of(before)
+    {
+        let line = text[..offset + open].matches('\n').count() + 1;
+        let head = before[..=open].rsplit('\n').next().unwrap_or("").trim();
+        let note = format!("this `}}` closes `{head}` from line {line}");
+        if d.help.is_none() {
+            d.help(note.clone());
         }
+        d.label(note);
     }
     if let Some(h) = help {
         d.help(h);

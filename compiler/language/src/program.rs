@@ -378,10 +378,8 @@ impl Bound {
 impl Expr {
     fn collect_paths(&self, out: &mut Vec<Path>) {
         match &self.node {
-            Node::Path(p) => {
-                if !out.contains(p) {
-                    out.push(p.clone());
-                }
+            Node::Path(p) if !out.contains(p) => {
+                out.push(p.clone());
             }
             Node::RangeEnd { range, .. } => range.collect_paths(out),
             Node::Range { lo, hi } => {

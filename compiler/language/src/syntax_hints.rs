@@ -60,27 +60,28 @@ pub fn hint(
             "write `at 10 10 100 100`".into(),
         ));
     }
-    if let Some((_, unit)) = UNIT_WORDS.iter().find(|(w, _)| *w == found) {
-        if prev.parse::<f64>().is_ok() {
-            return Some((
-                Some(format!("`{found}` is not a unit")),
-                format!("write `{prev}{unit}`: {UNITS}"),
-            ));
-        }
+    if let Some((_, unit)) = UNIT_WORDS.iter().find(|(w, _)| *w == found)
+        && prev.parse::<f64>().is_ok()
+    {
+        return Some((
+            Some(format!("`{found}` is not a unit")),
+            format!("write `{prev}{unit}`: {UNITS}"),
+        ));
     }
-    if let Some(split) = found.find(|c: char| !(c.is_ascii_digit() || c == '.')) {
-        if split > 0 && found[split..].chars().all(|c| c.is_alphabetic()) {
-            let unit = &found[split..];
-            let fix = UNIT_WORDS
-                .iter()
-                .find(|(w, _)| *w == unit)
-                .map(|(_, u)| format!("write `{}{u}`: ", &found[..split]))
-                .unwrap_or_default();
-            return Some((
-                Some(format!("`{found}` is not a number with a unit")),
-                format!("{fix}{UNITS}"),
-            ));
-        }
+    if let Some(split) = found.find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        && split > 0
+        && found[split..].chars().all(|c| c.is_alphabetic())
+    {
+        let unit = &found[split..];
+        let fix = UNIT_WORDS
+            .iter()
+            .find(|(w, _)| *w == unit)
+            .map(|(_, u)| format!("write `{}{u}`: ", &found[..split]))
+            .unwrap_or_default();
+        return Some((
+            Some(format!("`{found}` is not a number with a unit")),
+            format!("{fix}{UNITS}"),
+        ));
     }
     if matches!(found, "to" | "-") && prev.parse::<f64>().is_ok() && before.contains("range") {
         return Some((None, format!("a range is written `range {prev} .. MAX`")));
@@ -106,12 +107,12 @@ pub fn hint(
             SHAPES[0].1.to_string(),
         ));
     }
-    if message.contains("something else") {
-        if let Some((_, shape)) = SHAPES.iter().find(|(k, _)| *k == item) {
-            let shown =
-                if found.is_empty() { "the end of the item".into() } else { format!("`{found}`") };
-            return Some((Some(format!("unexpected {shown} in this `{item}`")), shape.to_string()));
-        }
+    if message.contains("something else")
+        && let Some((_, shape)) = SHAPES.iter().find(|(k, _)| *k == item)
+    {
+        let shown =
+            if found.is_empty() { "the end of the item".into() } else { format!("`{found}`") };
+        return Some((Some(format!("unexpected {shown} in this `{item}`")), shape.to_string()));
     }
     None
 }

@@ -51,41 +51,38 @@ impl Checker<'_, '_> {
     }
 
     fn expr(&mut self, e: &Expr) {
-        match &e.node {
-            Node::Binary {
-                op: BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne,
-                lhs,
-                rhs,
-            } => {
-                for (path, other) in [(lhs, rhs), (rhs, lhs)] {
-                    if let (Node::Path(p), Some(c)) =
-                        (&path.node, other.constant().and_then(|c| c.number()))
-                    {
-                        if let Some(prop) = self.property(p).cloned() {
-                            self.range(&prop, c, other.span, p);
-                        }
-                    }
+        if let Node::Binary {
+            op: BinOp::Lt | BinOp::Le | BinOp::Gt | BinOp::Ge | BinOp::Eq | BinOp::Ne,
+            lhs,
+            rhs,
+        } = &e.node
+        {
+            for (path, other) in [(lhs, rhs), (rhs, lhs)] {
+                if let (Node::Path(p), Some(c)) =
+                    (&path.node, other.constant().and_then(|c| c.number()))
+                    && let Some(prop) = self.property(p).cloned()
+                {
+                    self.range(&prop, c, other.span, p);
                 }
             }
-            _ => {}
         }
     }
 
     fn range(&mut self, prop: &Property, value: f64, span: Span, p: &Path) {
-        if let Some([lo, hi]) = prop.range {
-            if value < lo || value > hi {
-                self.diags
-                    .error(
-                        codes::OUT_OF_RANGE,
-                        span,
-                        format!("{value} is outside the range of `{p}`, {lo} ..= {hi}"),
-                    )
-                    .label("out of range")
-                    .help(format!(
-                        "the schema declares {lo} ..= {hi}{}",
-                        prop.units.as_deref().map(|u| format!(" {u}")).unwrap_or_default()
-                    ));
-            }
+        if let Some([lo, hi]) = prop.range
+            && (value < lo || value > hi)
+        {
+            self.diags
+                .error(
+                    codes::OUT_OF_RANGE,
+                    span,
+                    format!("{value} is outside the range of `{p}`, {lo} ..= {hi}"),
+                )
+                .label("out of range")
+                .help(format!(
+                    "the schema declares {lo} ..= {hi}{}",
+                    prop.units.as_deref().map(|u| format!(" {u}")).unwrap_or_default()
+                ));
         }
     }
 

@@ -18,6 +18,9 @@ use crate::program::*;
 use crate::schema::{Lookup, Schema};
 use crate::source::Span;
 use crate::types::{Type, TypeKind};
+
+/// A component's parameters as (name, type, default), its events, and whether it is native.
+type Signature = (Vec<(String, Type, Option<Bound>)>, Vec<String>, bool);
 use std::collections::HashMap;
 
 pub fn check_types(
@@ -148,16 +151,17 @@ impl Typer<'_, '_> {
             }
             Item::Menu(menu) => {
                 let ty = (!menu.object_type.is_empty()).then(|| menu.object_type.clone());
-                if let Some(t) = &ty {
-                    if !self.schema.is_empty() && !self.schema.has_type(t) {
-                        self.diags
-                            .error(
-                                codes::UNKNOWN_PROPERTY,
-                                menu.type_span,
-                                format!("the schema declares no object type \"{t}\""),
-                            )
-                            .suggest(t, self.schema.types.keys().map(String::as_str));
-                    }
+                if let Some(t) = &ty
+                    && !self.schema.is_empty()
+                    && !self.schema.has_type(t)
+                {
+                    self.diags
+                        .error(
+                            codes::UNKNOWN_PROPERTY,
+                            menu.type_span,
+                            format!("the schema declares no object type \"{t}\""),
+                        )
+                        .suggest(t, self.schema.types.keys().map(String::as_str));
                 }
                 let s = Scope { self_type: Some(ty), ..scope.clone() };
                 let items = menu
@@ -315,26 +319,23 @@ impl Typer<'_, '_> {
         let b = self.lower(e, scope);
         if !b.ty.is_numeric() {
             self.not_a_number(&b, "a position or size");
-        } else if let Some(u) = b.ty.unit() {
-            if u != "%" && u != "px" {
-                self.diags
-                    .error(
-                        codes::UNIT_MISMATCH,
-                        e.span,
-                        format!("a position or size is in px or %, not {u}"),
-                    )
-                    .label(format!("this is in {u}"));
-            }
+        } else if let Some(u) = b.ty.unit()
+            && u != "%"
+            && u != "px"
+        {
+            self.diags
+                .error(
+                    codes::UNIT_MISMATCH,
+                    e.span,
+                    format!("a position or size is in px or %, not {u}"),
+                )
+                .label(format!("this is in {u}"));
         }
         Bound::new(b)
     }
 
     /// The component's parameters as (name, type, default), its events, and whether native.
-    fn signature(
-        &mut self,
-        module: ModuleId,
-        name: &str,
-    ) -> Option<(Vec<(String, Type, Option<Bound>)>, Vec<String>, bool)> {
+    fn signature(&mut self, module: ModuleId, name: &str) -> Option<Signature> {
         if let Some(n) = builtins::native(name) {
             let params = n
                 .params
@@ -365,8 +366,8 @@ impl Typer<'_, '_> {
             match p {
                 ast::Param::Event { name } => events.push(name.name.clone()),
                 ast::Param::Value { name, ty, default } => {
-                    let declared = ty.as_ref().and_then(|t| match Type::parse_name(&t.name.name) {
-                        Some(ty) => Some(ty.maybe_absent(t.optional)),
+                    let declared = ty.as_ref().map(|t| match Type::parse_name(&t.name.name) {
+                        Some(ty) => ty.maybe_absent(t.optional),
                         None => {
                             if report {
                                 self.diags
@@ -375,7 +376,7 @@ impl Typer<'_, '_> {
                                     .help
                                     .get_or_insert_with(|| "types are number, bool, string, colour, duration, range and object; add `?` when it may be absent".into());
                             }
-                            Some(Type::ERROR)
+                            Type::ERROR
                         }
                     });
                     let default = default.as_ref().map(|d| {
@@ -384,14 +385,8 @@ impl Typer<'_, '_> {
                         } else {
                             self.quiet(|t| t.lower(d, &scope))
                         };
-                        if report {
-                            if let Some(want) = &declared {
-                                self.check_fits(
-                                    &b,
-                                    want,
-                                    &format!("the default of `{}`", name.name),
-                                );
-                            }
+                        if report && let Some(want) = &declared {
+                            self.check_fits(&b, want, &format!("the default of `{}`", name.name));
                         }
                         Bound::new(b)
                     });
@@ -455,10 +450,10 @@ impl Typer<'_, '_> {
             args.push(Arg { name: a.name.name.clone(), value: read_as(b, ty) });
         }
         for (name, ty, default) in params {
-            if !args.iter().any(|a: &Arg| a.name == name) {
-                if let Some(d) = default {
-                    args.push(Arg { name, value: read_as(d, &ty) });
-                }
+            if !args.iter().any(|a: &Arg| a.name == name)
+                && let Some(d) = default
+            {
+                args.push(Arg { name, value: read_as(d, &ty) });
             }
         }
         let handlers = w
@@ -534,7 +529,7 @@ impl Typer<'_, '_> {
         };
         let n = def.args.len();
         let count_ok = if def.variadic {
-            p.args.len() >= 2 * n && p.args.len() % n == 0
+            p.args.len() >= 2 * n && p.args.len().is_multiple_of(n)
         } else {
             p.args.len() == n
         };
@@ -679,18 +674,18 @@ impl Typer<'_, '_> {
                     }
                 }
                 ast::ActionKind::Call { call } => {
-                    if let ExprKind::Call(callee, args) = &call.kind {
-                        if !matches!(callee.kind, ExprKind::Name(_)) {
-                            let c = self.lower(callee, scope);
-                            let args: Vec<Bound> =
-                                args.iter().map(|x| Bound::new(self.lower(x, scope))).collect();
-                            if let Node::Path(p) = c.node {
-                                out.push(Action::Call { target: p, args, span });
-                                continue;
-                            }
-                            if c.ty.kind == TypeKind::Error {
-                                continue;
-                            }
+                    if let ExprKind::Call(callee, args) = &call.kind
+                        && !matches!(callee.kind, ExprKind::Name(_))
+                    {
+                        let c = self.lower(callee, scope);
+                        let args: Vec<Bound> =
+                            args.iter().map(|x| Bound::new(self.lower(x, scope))).collect();
+                        if let Node::Path(p) = c.node {
+                            out.push(Action::Call { target: p, args, span });
+                            continue;
+                        }
+                        if c.ty.kind == TypeKind::Error {
+                            continue;
                         }
                     }
                     self.diags
@@ -768,16 +763,16 @@ impl Typer<'_, '_> {
 
     fn check_fits(&mut self, b: &Expr, want: &Type, what: &str) {
         if b.ty.fits(want) {
-            if let (Some(have), Some(w)) = (b.ty.unit(), want.unit()) {
-                if have != w {
-                    self.diags
-                        .error(
-                            codes::UNIT_MISMATCH,
-                            b.span,
-                            format!("{what} is in {w}, but this is in {have}"),
-                        )
-                        .label(format!("this is in {have}"));
-                }
+            if let (Some(have), Some(w)) = (b.ty.unit(), want.unit())
+                && have != w
+            {
+                self.diags
+                    .error(
+                        codes::UNIT_MISMATCH,
+                        b.span,
+                        format!("{what} is in {w}, but this is in {have}"),
+                    )
+                    .label(format!("this is in {have}"));
             }
             return;
         }
@@ -903,10 +898,10 @@ impl Typer<'_, '_> {
                 if let Some((_, local)) = scope.locals.iter().rev().find(|(name, _)| name == n) {
                     return Expr { span, ..local.clone() };
                 }
-                if let Some(id) = self.defs.find_let(self.modules, scope.module, n, scope.limit) {
-                    if let Some(v) = self.top_let(id) {
-                        return Expr { span, ..v };
-                    }
+                if let Some(id) = self.defs.find_let(self.modules, scope.module, n, scope.limit)
+                    && let Some(v) = self.top_let(id)
+                {
+                    return Expr { span, ..v };
                 }
                 if n == "selected" {
                     return mk(
@@ -1060,20 +1055,17 @@ impl Typer<'_, '_> {
                 // (lets are inlined later, at their uses).
                 if let Lookup::Unknown { object_type, index, candidates } =
                     self.schema.lookup(p.base_type.as_deref(), from_root, &p.segments)
+                    && index + 1 == p.segments.len()
                 {
-                    if index + 1 == p.segments.len() {
-                        let seg = &p.segments[index];
-                        self.diags
-                            .error(
-                                codes::UNKNOWN_PROPERTY,
-                                name_span,
-                                format!(
-                                    "an object of type \"{object_type}\" has no property `{seg}`"
-                                ),
-                            )
-                            .label(format!("`{seg}` is not in the schema"))
-                            .suggest(seg, candidates.iter().copied());
-                    }
+                    let seg = &p.segments[index];
+                    self.diags
+                        .error(
+                            codes::UNKNOWN_PROPERTY,
+                            name_span,
+                            format!("an object of type \"{object_type}\" has no property `{seg}`"),
+                        )
+                        .label(format!("`{seg}` is not in the schema"))
+                        .suggest(seg, candidates.iter().copied());
                 }
                 let ty = self.path_type(&p);
                 mk(ty, Node::Path(p), span)
@@ -1137,12 +1129,11 @@ impl Typer<'_, '_> {
                 _ => {}
             }
         }
-        if f == "format" {
-            if let Some(Expr { node: Node::Str(spec), span, .. }) = args.get(1) {
-                if parse_spec(spec).is_none() {
-                    self.bad_spec(*span, spec);
-                }
-            }
+        if f == "format"
+            && let Some(Expr { node: Node::Str(spec), span, .. }) = args.get(1)
+            && parse_spec(spec).is_none()
+        {
+            self.bad_spec(*span, spec);
         }
         let first_unit = args.first().and_then(|a| a.ty.unit().map(str::to_string));
         let ty = match def.returns {

@@ -66,10 +66,10 @@ impl Definitions {
         name: &str,
         limit: Option<usize>,
     ) -> Option<DefId> {
-        if let Some(d) = self.lets[module].get(name) {
-            if limit.is_none_or(|l| d.item < l) {
-                return Some(*d);
-            }
+        if let Some(d) = self.lets[module].get(name)
+            && limit.is_none_or(|l| d.item < l)
+        {
+            return Some(*d);
         }
         modules[module]
             .uses

@@ -9,6 +9,9 @@ use crate::ast::*;
 use crate::builtins;
 use crate::codes;
 use crate::diagnostics::Diagnostics;
+
+/// A component's parameter names with whether each is required, and its events.
+type ParamsAndEvents = (Vec<(String, bool)>, Vec<String>);
 use std::collections::HashSet;
 
 /// The spans of `let` names that some expression reads.
@@ -132,7 +135,7 @@ impl Resolver<'_, '_> {
         }
         let m = scope.module;
         // The component's parameter names, whether each is required, and its events.
-        let signature: Option<(Vec<(String, bool)>, Vec<String>)> = if let Some(n) =
+        let signature: Option<ParamsAndEvents> = if let Some(n) =
             builtins::native(&w.component.name)
         {
             Some((
@@ -197,16 +200,17 @@ impl Resolver<'_, '_> {
             }
         }
         for a in &w.args {
-            if let Some((params, _)) = &signature {
-                if a.name.name != "visible" && !params.iter().any(|(p, _)| *p == a.name.name) {
-                    self.diags
-                        .error(
-                            codes::UNKNOWN_PARAM,
-                            a.name.span,
-                            format!("`{}` has no parameter `{}`", w.component.name, a.name.name),
-                        )
-                        .suggest(&a.name.name, params.iter().map(|(p, _)| p.as_str()));
-                }
+            if let Some((params, _)) = &signature
+                && a.name.name != "visible"
+                && !params.iter().any(|(p, _)| *p == a.name.name)
+            {
+                self.diags
+                    .error(
+                        codes::UNKNOWN_PARAM,
+                        a.name.span,
+                        format!("`{}` has no parameter `{}`", w.component.name, a.name.name),
+                    )
+                    .suggest(&a.name.name, params.iter().map(|(p, _)| p.as_str()));
             }
             self.expr(&a.value, &arg_scope);
         }
