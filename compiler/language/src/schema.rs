@@ -12,6 +12,7 @@
 //! type = "float"                # a mocu-value ValueKind: int, float, bool, string, …
 //! range = [0, 1]
 //! read_only = true
+//! stale_after = 5               # seconds without a write before the value is stale
 //! [types.usv.methods.arm]
 //! params = ["bool"]
 //! ```
@@ -71,6 +72,10 @@ pub struct Property {
     pub description: String,
     #[serde(default)]
     pub read_only: bool,
+    /// Seconds after its last write when the value is stale (shown veiled); `None`: the
+    /// display's default. Positive.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stale_after: Option<f64>,
 }
 
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -121,6 +126,14 @@ impl Schema {
         match toml::from_str::<Schema>(text) {
             Ok(s) => {
                 for (name, t) in &s.types {
+                    for (prop, p) in &t.properties {
+                        if let Some(v) = p.stale_after.filter(|v| !(v.is_finite() && *v > 0.0)) {
+                            let at = text.find("stale_after").unwrap_or(0);
+                            diags
+                                .error(codes::BAD_SCHEMA, Span::new(file, at, at + 11), format!("`stale_after` of `{name}.{prop}` is {v}: it must be more than 0 seconds"))
+                                .help("e.g. `stale_after = 2.5` (seconds)");
+                        }
+                    }
                     for (child, ty) in &t.children {
                         if !s.types.contains_key(ty) {
                             let at = text.find(&format!("\"{ty}\"")).unwrap_or(0);
