@@ -180,6 +180,8 @@ impl SkiaCanvas {
             let chord = |r: f32| if r > 0.0 && r * r > dy2 { (r * r - dy2).sqrt() } else { -1.0 };
             let h_solid = chord(ro - 0.5);
             let h_inner = if ri > 0.0 { chord(ri + 0.5) } else { -1.0 };
+            // The caps this row passes near (a cap is a disc of radius hw about its centre).
+            let near = caps.map(|(_, cy)| (dy + c.y - cy).abs() < hw + 0.5);
             let row = &mut px[y as usize * w..][..w];
             // Fully covered pixels are blended as runs.
             let mut run: Option<i32> = None;
@@ -213,9 +215,12 @@ impl SkiaCanvas {
                     let ang = if small { e0.min(e1) } else { e0.max(e1) };
                     k = radial * ang;
                 }
-                if round && k < 1.0 {
+                if round && k < 1.0 && (near[0] || near[1]) {
                     let reach = (hw + 0.5) * (hw + 0.5);
-                    for (cx, cy) in caps {
+                    for (i, (cx, cy)) in caps.into_iter().enumerate() {
+                        if !near[i] {
+                            continue;
+                        }
                         let d2 = (x as f32 + 0.5 - cx).powi(2) + (dy + c.y - cy).powi(2);
                         if d2 < reach {
                             k = k.max(cov(hw, d2.sqrt()));
