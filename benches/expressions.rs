@@ -164,7 +164,8 @@ impl Prepared {
         let n_in = 3;
         let f = Function { inputs: vec![Ty::Num; n_in], outputs: vec![c.ir] };
         let ty = f.check().expect("well-typed")[0];
-        let jit: Box<dyn Evaluate> = Box::new(mocu_jit::compile(&[f.clone()]).expect("compiles"));
+        let jit: Box<dyn Evaluate> =
+            Box::new(mocu_jit::compile(std::slice::from_ref(&f)).expect("compiles"));
         let interp: Box<dyn Evaluate> = Box::new(Interpreter::new(&[f]).expect("checks"));
         let tree = evalexpr::build_operator_tree::<DefaultNumericTypes>(c.evalexpr)
             .unwrap_or_else(|e| panic!("evalexpr cannot parse {}: {e}", c.evalexpr));

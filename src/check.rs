@@ -66,8 +66,7 @@ pub fn main(args: CheckArgs) -> ExitCode {
         match std::fs::read(&f) {
             // Bytes in: a file that is not UTF-8 is a located finding (E0107), not an I/O error.
             Ok(bytes) => {
-                if let Some(t) = mocu_language::lexer::decode(&f, bytes, &mut sources, &mut diags)
-                {
+                if let Some(t) = mocu_language::lexer::decode(&f, bytes, &mut sources, &mut diags) {
                     texts.push((f, t));
                 }
             }
@@ -81,18 +80,18 @@ pub fn main(args: CheckArgs) -> ExitCode {
     // Layouts named by a profile in this run are checked through it (with its schemas) only.
     let mut covered = std::collections::HashSet::new();
     for (path, text) in &texts {
-        if mocu_language::file_kind(path, text) == FileKind::Profile {
-            if let Ok(p) = toml::from_str::<mocu_language::profile::ProfileFile>(text) {
-                covered.extend(p.profile.layouts.iter().filter_map(|l| FsLoader.resolve(path, l)));
-            }
+        if mocu_language::file_kind(path, text) == FileKind::Profile
+            && let Ok(p) = toml::from_str::<mocu_language::profile::ProfileFile>(text)
+        {
+            covered.extend(p.profile.layouts.iter().filter_map(|l| FsLoader.resolve(path, l)));
         }
     }
     let explicit = args.profile.as_deref().map(slashed);
-    if let Some(p) = &explicit {
-        if !Path::new(p).is_file() {
-            eprintln!("error: cannot read the profile `{p}`: no such file");
-            return ExitCode::from(2);
-        }
+    if let Some(p) = &explicit
+        && !Path::new(p).is_file()
+    {
+        eprintln!("error: cannot read the profile `{p}`: no such file");
+        return ExitCode::from(2);
     }
     // Each layout is checked in its project (loaded once): --profile, else the nearest
     // project.toml above it. Those with none are named once at the end.

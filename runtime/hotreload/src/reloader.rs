@@ -18,6 +18,9 @@ pub enum Outcome {
     Failed(String),
 }
 
+/// Called with the components of each newly loaded program.
+pub type OnComponents = Arc<dyn Fn(&mocu_language::Program) + Send + Sync>;
+
 #[derive(Clone)]
 pub struct ReloaderOptions {
     pub config: LayoutConfig,
@@ -25,7 +28,7 @@ pub struct ReloaderOptions {
     pub layout: Option<String>,
     /// Called with the components of each newly loaded program (the widget renderer's
     /// library is rebuilt from them).
-    pub on_components: Option<Arc<dyn Fn(&mocu_language::Program) + Send + Sync>>,
+    pub on_components: Option<OnComponents>,
 }
 
 /// The running layout of a target, and the means to reload it.
@@ -219,7 +222,7 @@ impl Inner {
                     "mocu: reload of {} failed: {why}; the last good layout stays on screen",
                     self.target.display()
                 );
-                banner::show(&self.ds, &[why.clone()]);
+                banner::show(&self.ds, std::slice::from_ref(why));
                 self.sink.record("diagnostic", &[("message", Value::str(why))]);
             }
         }

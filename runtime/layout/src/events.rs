@@ -22,8 +22,11 @@ impl EventSink for NullSink {
 /// Keeps events in memory (tests, and the on-screen toast list).
 #[derive(Default)]
 pub struct MemorySink {
-    pub events: Mutex<Vec<(String, Vec<(String, Value)>)>>,
+    pub events: Mutex<Vec<Event>>,
 }
+
+/// A recorded event: its kind and its fields.
+pub type Event = (String, Vec<(String, Value)>);
 
 impl EventSink for MemorySink {
     fn record(&self, event: &str, fields: &[(&str, Value)]) {

@@ -33,7 +33,8 @@ fn a_layout_passes_whole_numbers_to_int_parameters_and_objects_as_their_guid() {
         let routes = ds.create_object(v, ObjectInfo::new("routes", "routes")).unwrap();
         let survey = ds.create_object(routes, ObjectInfo::new("survey", "route")).unwrap();
         ds.set(v, "index", Value::Float(4.0)).unwrap();
-        let seen: Arc<Mutex<Vec<(String, Vec<Value>)>>> = Arc::default();
+        type Calls = Arc<Mutex<Vec<(String, Vec<Value>)>>>;
+        let seen: Calls = Arc::default();
         let record = |name: &'static str| {
             let seen = seen.clone();
             move |args: &[Value]| {
