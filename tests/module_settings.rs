@@ -1,0 +1,73 @@
+//! The settings the compiler checks profiles against (mocu_language::modules) are the ones
+//! `mocu run`'s modules accept: the same kinds, and every declared key, set to a value of its
+//! declared type, starts its module.
+
+use mocu_dataserver::DataServer;
+use mocu_host::{ModuleHost, ModuleSpec, Registry};
+use mocu_language::modules::{self, SettingType};
+
+fn registry() -> Registry {
+    let mut r = Registry::new();
+    mocu_sim::register(&mut r);
+    mocu_mavlink::register(&mut r);
+    mocu_video::register(&mut r);
+    mocu_input::register(&mut r);
+    r
+}
+
+/// A valid value of each declared setting (ranges and formats the modules check).
+fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
+    match (kind, key) {
+        (_, "address") => "127.0.0.1:0".into(),
+        ("sim", "rate_hz") | ("input", "rate_hz") => 20.0.into(),
+        ("input", "double_ms") => 300.0.into(),
+        ("sim", "camera_width") | ("sim", "camera_height") => 16.into(),
+        ("sim", "vehicles") => toml::Value::Array(vec!["usv1".into(), "uav_a".into()]),
+        ("codec", "source") => "root.cameras.test".into(),
+        ("video", "feeds") => "auto".into(),
+        ("input", "gilrs") => false.into(),
+        ("input", "script") | ("video", "camera") => "".into(),
+        (_, "kind") => kind.into(),
+        _ => match ty {
+            SettingType::Int => 1.into(),
+            SettingType::Number => 1.5.into(),
+            SettingType::Bool => true.into(),
+            SettingType::String => "x".into(),
+            SettingType::Names => toml::Value::Array(vec![]),
+        },
+    }
+}
+
+#[test]
+fn the_compiler_knows_exactly_the_module_kinds_mocu_run_registers() {
+    let r = registry();
+    let mut run: Vec<&str> = r.kinds().collect();
+    let mut declared: Vec<&str> = modules::MODULES.iter().map(|m| m.kind).collect();
+    run.sort();
+    declared.sort();
+    assert_eq!(run, declared);
+}
+
+#[test]
+fn every_declared_setting_is_accepted_by_its_module() {
+    for m in modules::MODULES {
+        // The simulator takes `vehicles` or the counts, not both: one spec with each.
+        let groups: Vec<Vec<&str>> = if m.kind == "sim" {
+            vec![vec!["usv", "ugv", "uav"], vec!["vehicles"]]
+        } else {
+            vec![vec![]]
+        };
+        for skip in groups {
+            let mut spec = ModuleSpec::new(m.kind).named(&format!("t_{}", m.kind));
+            for s in m.settings.iter().chain(modules::COMMON) {
+                if !skip.contains(&s.name) {
+                    spec = spec.with(s.name, sample(m.kind, s.name, s.ty));
+                }
+            }
+            let mut host = ModuleHost::new(DataServer::default(), registry());
+            let started = host.start(&spec);
+            host.stop_all();
+            assert!(started.is_ok(), "{}: {:?} with {:?}", m.kind, started, spec.settings);
+        }
+    }
+}
