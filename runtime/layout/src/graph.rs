@@ -84,6 +84,8 @@ pub(crate) struct Shared {
     /// Changes reported by path watches, applied at the next tick. A separate lock: watch
     /// callbacks never wait for an evaluation in progress.
     inbox: Mutex<Inbox>,
+    /// Widgets whose data can age (see `stale.rs`); its own lock, taken after `state`.
+    pub(crate) ages: Mutex<HashMap<Guid, crate::stale::Age>>,
 }
 
 #[derive(Default)]
@@ -434,6 +436,7 @@ impl Layout {
                 items: Vec::new(),
             }),
             inbox: Mutex::new(Inbox::default()),
+            ages: Mutex::new(HashMap::new()),
         });
         {
             let mut st = shared.state.lock();
@@ -796,6 +799,7 @@ impl Shared {
                     Some(v) => self.ds.set(obj, name, v),
                     None => self.ds.delete_property(obj, name),
                 };
+                crate::stale::on_output(self, obj);
             }
             Target::WatchWhen(w) => crate::watch::on_when(self, st, w, v.and_then(|v| v.as_bool())),
             Target::WatchClear(w) => {
@@ -939,6 +943,7 @@ impl Shared {
             let cell = self.add_cell(st, &w.f, targets, instance);
             made.push((g, cell));
             let object = instance.and_then(|i| st.instances[i].as_ref()).map(|i| i.object);
+            crate::stale::register(self, g, w.f.slots(), object);
             actions::publish_handlers(self, g, &w.handlers, object);
             if let Some(i) = instance
                 && let Some(inst) = st.instances[i].as_mut()

@@ -10,8 +10,13 @@
 //! template's object (`for each v in root.vehicles …`). A stopped boat with a good link
 //! writes the same speed over and over and is never stale.
 
+use crate::graph::{Shared, resolve};
+use mocu_dataserver::DataServer;
 use mocu_jit as jit;
 use mocu_lower::{Base, Lowerer, Source};
+use mocu_value::{Guid, Value};
+use std::sync::Arc;
+use std::time::Duration;
 
 /// Flags of a vehicle that say its data is old.
 pub const FLAGS: [&str; 2] = ["stale", "link_lost"];
@@ -56,4 +61,135 @@ pub(crate) fn widget_stale(lw: &mut Lowerer) -> Option<jit::Expr> {
         }
     }
     out
+}
+
+/// Age: a widget whose vehicle declares `stale_after` (seconds: how often it writes its
+/// telemetry at the least; the protocol module knows its rate) is also stale — property
+/// `aged` — while one of the numbers or flags it reads from that vehicle has received no
+/// write (an unchanged one counts: `DataServer::received_at`) for that long. One delayed
+/// call per widget on the server's clock, armed when the widget's data first arrives and
+/// re-armed for the next deadline; while aged it re-checks twice per period.
+pub(crate) struct Age {
+    /// (base, object names, property) of each input the age applies to.
+    inputs: Vec<(Base, Vec<String>, String)>,
+    instance: Option<Guid>,
+    armed: bool,
+    aged: bool,
+}
+
+/// Registers widget `g`'s age inputs (its numeric and boolean paths through a vehicle).
+pub(crate) fn register(
+    sh: &Arc<Shared>,
+    g: Guid,
+    slots: &[(Source, jit::Ty)],
+    instance: Option<Guid>,
+) {
+    let mut inputs = Vec::new();
+    for (src, ty) in slots {
+        let Source::Path { base, objects, property } = src else { continue };
+        let under_vehicle = match base {
+            Base::Root => objects.len() >= 2 && objects[0] == "vehicles",
+            Base::Var(_) => true,
+            _ => false,
+        };
+        if under_vehicle
+            && matches!(ty, jit::Ty::Num | jit::Ty::Bool)
+            && !FLAGS.contains(&property.as_str())
+        {
+            inputs.push((base.clone(), objects.clone(), property.clone()));
+        }
+    }
+    if !inputs.is_empty() {
+        sh.ages.lock().insert(g, Age { inputs, instance, armed: false, aged: false });
+    }
+}
+
+/// An output of `g` was written (its data changed): fresh, and the age check armed.
+pub(crate) fn on_output(sh: &Arc<Shared>, g: Guid) {
+    let arm = {
+        let mut ages = sh.ages.lock();
+        let Some(a) = ages.get_mut(&g) else { return };
+        if a.aged {
+            a.aged = false;
+            let _ = sh.ds.set(g, "aged", Value::Bool(false));
+        }
+        !std::mem::replace(&mut a.armed, true)
+    };
+    if arm {
+        check(sh, g);
+    }
+}
+
+/// The vehicle object and the object of one input.
+fn objects_of(
+    ds: &DataServer,
+    base: &Base,
+    objects: &[String],
+    instance: Option<Guid>,
+) -> Option<(Guid, Guid)> {
+    match base {
+        Base::Root => {
+            let v = resolve(ds, Guid::ROOT, &objects[..2])?;
+            Some((v, resolve(ds, v, &objects[2..])?))
+        }
+        Base::Var(_) => {
+            let v = instance?;
+            Some((v, resolve(ds, v, objects)?))
+        }
+        _ => None,
+    }
+}
+
+fn period(ds: &DataServer, vehicle: Guid) -> Option<Duration> {
+    let s = ds.try_get(vehicle, "stale_after".into())?.as_f64()?;
+    (s.is_finite() && s > 0.0).then(|| Duration::from_secs_f64(s))
+}
+
+/// Compares each input's last write with its vehicle's period; writes `aged` when that
+/// changes; arms the next check (the earliest deadline, or one period while aged).
+fn check(sh: &Arc<Shared>, g: Guid) {
+    let ds = &sh.ds;
+    let (inputs, instance) = {
+        let ages = sh.ages.lock();
+        let Some(a) = ages.get(&g) else { return };
+        (a.inputs.clone(), a.instance)
+    };
+    if !ds.exists(g) {
+        sh.ages.lock().remove(&g);
+        return;
+    }
+    let now = ds.now();
+    let (mut old, mut next): (bool, Option<Duration>) = (false, None);
+    for (base, objects, property) in &inputs {
+        let Some((vehicle, obj)) = objects_of(ds, base, objects, instance) else { continue };
+        let Some(p) = period(ds, vehicle) else { continue };
+        let Some(at) = ds.received_at(obj, property.as_str()).ok().flatten() else { continue };
+        let age = now.saturating_duration_since(at);
+        // While aged, look again twice a period: a write (an unchanged one too) is seen
+        // within half a period.
+        let wait = if age >= p {
+            old = true;
+            p / 2
+        } else {
+            p - age
+        };
+        next = Some(next.map_or(wait, |n: Duration| n.min(wait)));
+    }
+    let changed = {
+        let mut ages = sh.ages.lock();
+        let Some(a) = ages.get_mut(&g) else { return };
+        a.armed = next.is_some();
+        std::mem::replace(&mut a.aged, old) != old
+    };
+    if changed {
+        let _ = ds.set(g, "aged", Value::Bool(old));
+    }
+    if let Some(wait) = next {
+        let weak = Arc::downgrade(sh);
+        ds.run_after(wait, Some(&sh.exec), move || {
+            if let Some(sh) = weak.upgrade() {
+                check(&sh, g);
+            }
+        });
+    }
 }

@@ -89,3 +89,34 @@ fn a_template_instance_is_stale_with_its_own_vehicle_only() {
     assert_eq!(stale(&ds, &["display", "strip@usv1", "fuel@usv1"]), Some(Value::Bool(false)));
     assert_eq!(stale(&ds, &["display", "strip@usv2", "fuel@usv2"]), Some(Value::Bool(true)));
 }
+
+/// A vehicle that declares `stale_after` (its module's period): a widget is `aged` once a
+/// number it reads has received no write for that long — an unchanged write keeps it fresh.
+/// Time is the DataServer's manual clock.
+#[test]
+fn data_that_stops_arriving_ages_after_its_vehicles_declared_period_and_unchanged_writes_keep_it_fresh()
+ {
+    let clock = Arc::new(ManualClock::new());
+    let ds = DataServer::with_clock(Config { workers: 2 }, clock.clone());
+    let (v1, nav1) = usv(&ds, "usv1");
+    ds.set(v1, "stale_after", Value::Float(1.0)).unwrap();
+    let layout = Layout::load(&ds, &program(STRIPS), config(), Arc::new(NullSink)).unwrap();
+    layout.settle();
+    let speed = ["display", "hud", "speed"];
+    let aged = |ds: &DataServer| ds.try_get(ds.resolve(&speed).unwrap(), "aged".into());
+    assert_ne!(aged(&ds), Some(Value::Bool(true)));
+    for _ in 0..4 {
+        clock.advance(Duration::from_millis(600));
+        ds.set(nav1, "speed", Value::Float(0.0)).unwrap(); // the same value: still received
+        layout.settle();
+        assert_ne!(aged(&ds), Some(Value::Bool(true)), "written every 0.6 s: fresh");
+    }
+    clock.advance(Duration::from_millis(1100));
+    layout.settle();
+    assert_eq!(aged(&ds), Some(Value::Bool(true)), "nothing for 1.1 s: aged");
+    ds.set(nav1, "speed", Value::Float(0.0)).unwrap();
+    clock.advance(Duration::from_millis(600));
+    layout.settle();
+    assert_eq!(aged(&ds), Some(Value::Bool(false)), "written again: fresh at the next check");
+    assert_eq!(stale(&ds, &speed), Some(Value::Bool(false)), "the link was never lost");
+}

@@ -678,7 +678,8 @@ impl Shared {
             );
         }
         if data.iter().any(|d| props.contains_key(d))
-            && props.get("stale").and_then(Value::as_bool) == Some(true)
+            && (props.get("stale").and_then(Value::as_bool) == Some(true)
+                || props.get("aged").and_then(Value::as_bool) == Some(true))
         {
             stale_veil(c, b, drawn.unwrap_or(Rect::new(0.0, 0.0, b.w, b.h)), radius);
         }
