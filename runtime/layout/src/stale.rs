@@ -68,7 +68,8 @@ pub(crate) fn widget_stale(lw: &mut Lowerer) -> Option<jit::Expr> {
 /// `aged` — while one of the numbers or flags it reads from that vehicle has received no
 /// write (an unchanged one counts: `DataServer::received_at`) for that long. One delayed
 /// call per widget on the server's clock, armed when the widget's data first arrives and
-/// re-armed for the next deadline; while aged it re-checks twice per period.
+/// re-armed for the next deadline; once aged, no timer runs: the next changed value makes it
+/// fresh (an unchanged write after aging is not seen until then — nothing polls).
 pub(crate) struct Age {
     /// (base, object names, property) of each input the age applies to.
     inputs: Vec<(Base, Vec<String>, String)>,
@@ -165,26 +166,25 @@ fn check(sh: &Arc<Shared>, g: Guid) {
         let Some(p) = period(ds, vehicle) else { continue };
         let Some(at) = ds.received_at(obj, property.as_str()).ok().flatten() else { continue };
         let age = now.saturating_duration_since(at);
-        // While aged, look again twice a period: a write (an unchanged one too) is seen
-        // within half a period.
-        let wait = if age >= p {
+        // An input that aged needs no more timers (nothing polls): its next changed value
+        // makes the widget fresh again (`on_output`).
+        if age >= p {
             old = true;
-            p / 2
-        } else {
-            p - age
-        };
+            continue;
+        }
+        let wait = p - age;
         next = Some(next.map_or(wait, |n: Duration| n.min(wait)));
     }
     let changed = {
         let mut ages = sh.ages.lock();
         let Some(a) = ages.get_mut(&g) else { return };
-        a.armed = next.is_some();
+        a.armed = next.is_some() && !old;
         std::mem::replace(&mut a.aged, old) != old
     };
     if changed {
         let _ = ds.set(g, "aged", Value::Bool(old));
     }
-    if let Some(wait) = next {
+    if let (Some(wait), false) = (next, old) {
         let weak = Arc::downgrade(sh);
         ds.run_after(wait, Some(&sh.exec), move || {
             if let Some(sh) = weak.upgrade() {
