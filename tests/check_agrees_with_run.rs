@@ -109,3 +109,71 @@ fn a_chain_of_300_lets_is_refused_by_check_at_its_use_not_by_run() {
         other => panic!("a 300-deep chain must not check clean: {:?}", other.map(|_| ())),
     }
 }
+
+/// What the simulator publishes under a vehicle, checked against the shipped schema: each
+/// child, property (by value kind) and method (by parameter kinds) must be declared, or a
+/// layout using it would fail `mocu check` although `mocu run` accepts it.
+#[test]
+fn the_shipped_schema_declares_everything_the_simulator_publishes() {
+    use mocu_language::schema::Schema;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("layouts/schemas/vehicles.toml")).unwrap();
+    let schema: Schema = toml::from_str(&text).unwrap();
+    let ds = DataServer::default();
+    let cfg = SimConfig { autostart: true, ..SimConfig::default() };
+    let sim = Sim::new(ModuleContext::detached("sim", ds.clone()), cfg).unwrap();
+    sim.step(5.0);
+    ds.quiesce();
+    let vehicles = ds.snapshot(ds.resolve(&["vehicles"]).unwrap()).unwrap();
+    let mut missing = Vec::new();
+    /// Looks every member up the way `mocu check` does (from `root`).
+    fn walk(
+        ds: &DataServer,
+        schema: &Schema,
+        s: &mocu_dataserver::Snapshot,
+        path: &[String],
+        missing: &mut Vec<String>,
+    ) {
+        use mocu_language::schema::Lookup;
+        let at = |n: &str| {
+            let mut p = path.to_vec();
+            p.push(n.to_string());
+            p
+        };
+        let text = |p: &[String]| format!("root.{}", p.join("."));
+        for (name, value) in &s.properties {
+            let p = at(name);
+            match schema.lookup(None, true, &p) {
+                Lookup::Property(d) if d.kind == value.kind() => {}
+                Lookup::Property(d) => missing.push(format!(
+                    "{}: schema {}, published {}",
+                    text(&p),
+                    d.kind,
+                    value.kind()
+                )),
+                _ => missing.push(format!("{} ({})", text(&p), value.kind())),
+            }
+        }
+        for m in ds.methods(s.guid).unwrap_or_default() {
+            let got: Vec<_> = m.params.iter().filter_map(|p| p.kind).collect();
+            let p = at(m.name.as_str());
+            match schema.lookup(None, true, &p) {
+                Lookup::Method(d) if d.params == got => {}
+                _ => missing.push(format!("{}({got:?})", text(&p))),
+            }
+        }
+        for c in &s.children {
+            let p = at(&c.name);
+            match schema.lookup(None, true, &p) {
+                Lookup::Object(_) => walk(ds, schema, c, &p, missing),
+                _ => missing.push(format!("object {} (kind {})", text(&p), c.kind)),
+            }
+        }
+    }
+    for v in &vehicles.children {
+        walk(&ds, &schema, v, &["vehicles".to_string(), v.name.clone()], &mut missing);
+    }
+    missing.sort();
+    missing.dedup();
+    assert!(missing.is_empty(), "layouts/schemas/vehicles.toml lacks:\n{}", missing.join("\n"));
+}

@@ -178,17 +178,37 @@ impl Schema {
         from_root: bool,
         segments: &[String],
     ) -> Lookup<'a> {
-        let (mut ty, start) = match (base_type, from_root) {
+        let (ty, start) = match (base_type, from_root) {
             (Some(t), _) => match self.types.get_key_value(t) {
                 Some((k, _)) => (k.as_str(), 0),
                 None => return Lookup::Untyped,
             },
-            (None, true) => match self.instance_at(segments) {
-                Some((t, used)) => (t, used),
-                None => return Lookup::Untyped,
-            },
+            (None, true) => {
+                // Every instance pattern matching a prefix, longest first: a member (property,
+                // method) found through a shorter one wins over an object that a longer `*`
+                // pattern makes of the same name (`routes.create_route` vs `routes.*`).
+                let mut results: Vec<Lookup<'a>> = self
+                    .instances_at(segments)
+                    .into_iter()
+                    .map(|(t, used)| self.walk(t, used, segments))
+                    .collect();
+                let pick = results
+                    .iter()
+                    .position(|l| matches!(l, Lookup::Property(_) | Lookup::Method(_)))
+                    .or_else(|| results.iter().position(|l| matches!(l, Lookup::Object(_))))
+                    .or((!results.is_empty()).then_some(0));
+                return match pick {
+                    Some(i) => results.swap_remove(i),
+                    None => Lookup::Untyped,
+                };
+            }
             (None, false) => return Lookup::Untyped,
         };
+        self.walk(ty, start, segments)
+    }
+
+    /// Follows `segments[start..]` from an object of type `ty`.
+    fn walk<'a>(&'a self, mut ty: &'a str, start: usize, segments: &[String]) -> Lookup<'a> {
         if start == segments.len() {
             return Lookup::Object(ty);
         }
@@ -218,14 +238,20 @@ impl Schema {
         Lookup::Object(ty)
     }
 
-    /// The type of the object at the longest instance pattern matching a prefix of `segments`
-    /// (which follow `root`), and how many segments it used.
-    fn instance_at(&self, segments: &[String]) -> Option<(&str, usize)> {
-        self.instances.iter().find_map(|inst| {
-            let pat: Vec<&str> = inst.path.split('.').skip_while(|s| *s == "root").collect();
-            (pat.len() <= segments.len() && pat.iter().zip(segments).all(|(p, s)| glob(p, s)))
-                .then_some((inst.object_type.as_str(), pat.len()))
-        })
+    /// The types of the objects at every instance pattern matching a prefix of `segments`
+    /// (which follow `root`), with how many segments each used, longest first.
+    fn instances_at(&self, segments: &[String]) -> Vec<(&str, usize)> {
+        let mut out: Vec<(&str, usize)> = self
+            .instances
+            .iter()
+            .filter_map(|inst| {
+                let pat: Vec<&str> = inst.path.split('.').skip_while(|s| *s == "root").collect();
+                (pat.len() <= segments.len() && pat.iter().zip(segments).all(|(p, s)| glob(p, s)))
+                    .then_some((inst.object_type.as_str(), pat.len()))
+            })
+            .collect();
+        out.sort_by_key(|(_, used)| std::cmp::Reverse(*used));
+        out
     }
 
     /// Whether `object_type` is declared.
