@@ -110,7 +110,10 @@ fn entries(path: &str, text: &str) -> Vec<Entry> {
                         None => "(from the default)".to_string(),
                     };
                     let d = match default {
-                        Some(e) => format!("`{}`", one_line(&text[e.span.start as usize..e.span.end as usize])),
+                        Some(e) => format!(
+                            "`{}`",
+                            one_line(&text[e.span.start as usize..e.span.end as usize])
+                        ),
                         None => "required".to_string(),
                     };
                     let meaning = docs
