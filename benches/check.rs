@@ -1,7 +1,7 @@
 //! Checking generated layouts of 1,000, 10,000 and 100,000 lines (issue 13 target: 10,000
 //! lines in ≤ 50 ms), each against a baseline that scans every byte of the same text once
 //! (the floor any checker pays), so the figures read as ratios.
-//! `cargo bench --bench check`; criterion prints MB/s for both. Figures: docs/language.md.
+//! `cargo bench --bench check`; criterion prints MB/s for both. Figures: docs/diagnostics.md ("Limits and cost").
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use mocu_language::{Diagnostics, MemoryLoader, SourceMap};

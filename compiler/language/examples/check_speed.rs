@@ -13,6 +13,7 @@ fn main() {
     let runs = if lines > 50_000 { 3 } else { 11 };
     let mut scan = Vec::new();
     let mut check = Vec::new();
+    let mut parse = Vec::new();
     for _ in 0..runs {
         let t = Instant::now();
         let n = text.bytes().fold(0usize, |a, b| a + usize::from(b == b'\n' || b == b'{'));
@@ -31,14 +32,21 @@ fn main() {
         check.push(t.elapsed().as_secs_f64() * 1e3);
         assert!(!diags.has_errors(), "{:?}", diags.iter().next());
         std::hint::black_box(b);
+        let t = Instant::now();
+        let mut diags = mocu_language::Diagnostics::new();
+        let tree = mocu_language::parser::parse(mocu_language::FileId(0), &text, &mut diags);
+        parse.push(t.elapsed().as_secs_f64() * 1e3);
+        std::hint::black_box(tree);
     }
+    parse.sort_by(f64::total_cmp);
     scan.sort_by(f64::total_cmp);
     check.sort_by(f64::total_cmp);
     println!(
-        "{lines} lines, {} bytes: byte scan {:.3} ms, check {:.1} ms (median of {runs}), ratio {:.0}x",
+        "{lines} lines, {} bytes: byte scan {:.3} ms, check {:.1} ms (of which parsing {:.1} ms; median of {runs}), ratio {:.0}x",
         text.len(),
         scan[runs / 2],
         check[runs / 2],
+        parse[runs / 2],
         check[runs / 2] / scan[runs / 2]
     );
 }
