@@ -709,7 +709,7 @@ impl Shared {
                 let mut label = format!("{}: {reason}", state.replace('_', " ").to_uppercase());
                 // Cut to the room there is (the widget and its margins), with an ellipsis.
                 let room = b.w + MARGIN;
-                let width = |t: &str| mocu_display::measure_text(t, 11.0, false).width;
+                let width = |t: &str| mocu_display::measure_text(t, 12.0, false).width;
                 if width(&label) > room {
                     let mut chars: Vec<char> = label.chars().collect();
                     while chars.len() > 4
@@ -719,7 +719,7 @@ impl Shared {
                     }
                     label = format!("{}…", chars.iter().collect::<String>().trim_end());
                 }
-                let style = TextStyle::new(11.0, col).baseline(Baseline::Top);
+                let style = TextStyle::new(12.0, col).baseline(Baseline::Top);
                 c.draw_text(&label, Point::new(0.0, b.h + 5.0), &style);
             }
         }
@@ -751,7 +751,7 @@ fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32) {
     );
     // Where it hides the least: a short, wide widget's label (left), else high in the middle
     // (the value read-outs sit low or right).
-    let size = if area.h >= 14.0 { 10.0 } else { (area.h - 2.0).max(7.0) };
+    let size = if area.h >= 16.0 { 12.0 } else { (area.h - 2.0).max(8.0) };
     let tw = mocu_display::measure_text("STALE", size, true).width;
     let mid = if area.h < 48.0 && area.w >= tw + 12.0 {
         Point::new(area.x + 6.0 + tw / 2.0, area.y + area.h / 2.0)
@@ -897,7 +897,7 @@ fn context_menu(c: &mut dyn Canvas, props: &HashMap<String, Value>, b: Rect) {
 
 /// One row per vehicle: a link-state dot, the name, its type, link and fuel as small bars.
 fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Rect) {
-    let head = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle).bold();
+    let head = TextStyle::new(12.0, theme::DIM).baseline(Baseline::Middle).bold();
     c.draw_text("VEHICLES", Point::new(10.0, 13.0), &head);
     c.line(Point::new(6.0, 25.0), Point::new(b.w - 6.0, 25.0), 1.0, theme::FRAME);
     let vehicles = listed_vehicles(ds, filter);
@@ -908,7 +908,9 @@ fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Re
     }
     let row_h = LIST_ROW;
     // Two labelled bars after the name and type, within the list's width.
-    let bar_w = ((b.w - 130.0 - 2.0 * 36.0 - 8.0) / 2.0).clamp(16.0, 90.0);
+    // A narrow list leaves the type out.
+    let first = if b.w < 320.0 { 86.0 } else { 130.0 };
+    let bar_w = ((b.w - first - 2.0 * 42.0 - 8.0) / 2.0).clamp(16.0, 90.0);
     // The rows that fit; with more vehicles than that, the last row says how many are left.
     let fit = (((b.h - LIST_TOP) / row_h).floor().max(0.0)) as usize;
     let shown = if vehicles.len() > fit { fit.saturating_sub(1) } else { vehicles.len() };
@@ -938,13 +940,15 @@ fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Re
             .baseline(Baseline::Middle)
             .bold();
         c.draw_text(&info.name, Point::new(26.0, y), &name);
-        let kind = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle);
-        c.draw_text(&info.kind.to_uppercase(), Point::new(86.0, y), &kind);
-        let mut x = 130.0;
+        let kind = TextStyle::new(12.0, theme::DIM).baseline(Baseline::Middle);
+        if first > 86.0 {
+            c.draw_text(&info.kind.to_uppercase(), Point::new(86.0, y), &kind);
+        }
+        let mut x = first;
         for (label, value, warn, alarm) in [("LNK", link, 0.3, 0.1), ("FUEL", fuel, 0.2, 0.1)] {
-            let small = TextStyle::new(9.0, theme::DIM).baseline(Baseline::Middle);
+            let small = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle);
             c.draw_text(label, Point::new(x, y), &small);
-            let bx = x + 26.0;
+            let bx = x + 32.0;
             let track = Rect::new(bx, y - 4.0, bar_w, 8.0);
             c.fill_rounded_rect(track, 2.0, &Brush::Solid(theme::TRACK));
             match value {
