@@ -4,6 +4,9 @@
 //! | figure     | ours                                        | baseline                                   | target |
 //! |------------|---------------------------------------------|--------------------------------------------|--------|
 //! | latency    | write → subscriber callback → signal back   | crossbeam hop A → B → signal back          | ≤ 2×   |
+//! | … busy     | the same with a spinning neighbour thread    | the same hop, same neighbour               | ≤ 2×   |
+//! | … blocked  | the same on the default pool while another  | the same, nobody blocked                    | ≤ 1.2× |
+//! |            | subscriber blocks 100 ms at a time          |                                            |        |
 //! | fan-out    | one write reaching 16 subscribers           | one tokio broadcast send, 16 receivers     | ≤ 1.5× |
 //! | isolation  | write, 100,000 subs on unrelated objects    | the same write, no subscriptions           | ≤ 1.1× |
 //! | read       | `get(guid, name)`                           | std `HashMap` lookup + clone               | —      |
@@ -21,6 +24,7 @@
 //! flag) everything runs once, at a small size.
 
 mod common;
+mod dataserver_load;
 use common::filter;
 use criterion::{Criterion, criterion_group};
 use crossbeam_channel::{Receiver, Sender};
@@ -610,6 +614,41 @@ fn percentiles(rows: &mut Vec<Row>) {
     );
     rows.push(Row::new("latency median (µs/round trip)", us(om), us(bm), Some(2.0)));
     rows.push(Row::new("latency p99 (µs/round trip)", us(op), us(bp), Some(2.0)));
+
+    // The same, with a neighbour thread computing all the while (both sides).
+    let spin = dataserver_load::Spinner::start();
+    let (o, b) = round_trips(n, || ours.round_trip(), || bare.round_trip());
+    drop(spin);
+    let (om, op) = (percentile(&o, 0.5), percentile(&o, 0.99));
+    let (bm, bp) = (percentile(&b, 0.5), percentile(&b, 0.99));
+    eprintln!(
+        "  busy neighbour: dataserver median {:>8.2} µs p99 {:>8.2} µs; crossbeam median {:>8.2} µs p99 {:>8.2} µs",
+        us(om),
+        us(op),
+        us(bm),
+        us(bp)
+    );
+    rows.push(Row::new("latency median, busy neighbour (µs)", us(om), us(bm), Some(2.0)));
+    rows.push(Row::new("latency p99, busy neighbour (µs)", us(op), us(bp), Some(2.0)));
+
+    // An unrelated subscriber while another blocks 100 ms at a time, vs none blocked
+    // (both on the default pool).
+    let mut blocked = dataserver_load::PoolHop::new(true);
+    let mut free = dataserver_load::PoolHop::new(false);
+    let n2 = size(5_000, 50);
+    let (o, b) = round_trips(n2, || blocked.round_trip(), || free.round_trip());
+    drop((blocked, free));
+    let (om, op) = (percentile(&o, 0.5), percentile(&o, 0.99));
+    let (bm, bp) = (percentile(&b, 0.5), percentile(&b, 0.99));
+    eprintln!(
+        "  blocked neighbour: median {:>8.2} µs p99 {:>8.2} µs; none blocked: median {:>8.2} µs p99 {:>8.2} µs",
+        us(om),
+        us(op),
+        us(bm),
+        us(bp)
+    );
+    rows.push(Row::new("latency median, a sub blocked 100 ms (µs)", us(om), us(bm), Some(1.2)));
+    rows.push(Row::new("latency p99, a sub blocked 100 ms (µs)", us(op), us(bp), Some(1.2)));
 
     drop((ours, bare));
     let mut ours = DsFanout::new();
