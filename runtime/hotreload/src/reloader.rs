@@ -271,11 +271,16 @@ impl Inner {
             return Outcome::Failed("the chosen layout is no longer in the profile".into());
         };
         let program = &bundle.layouts[index].program;
+        // Found before the swap (it reads the file system): the banner clears right after it.
+        let files = dependencies(&self.target, &bundle, index);
+        // The banner goes as the good layout comes, never after it is on screen (a failed
+        // swap shows it again).
+        banner::clear(&self.ds);
         let mut st = self.state.lock();
         let Some(layout) = st.layout.as_ref() else { return Outcome::Failed("stopped".into()) };
         match layout.reload(program) {
             Ok(stats) => {
-                st.files = dependencies(&self.target, &bundle, index);
+                st.files = files;
                 drop(st);
                 if let Some(f) = &self.options.on_components {
                     f(program);
