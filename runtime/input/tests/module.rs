@@ -3,21 +3,30 @@
 
 mod common;
 use common::program;
-use mocu_dataserver::{DataServer, PropName, Value};
+use mocu_dataserver::{DataServer, Guid, PropName, Topic, Value};
 use mocu_host::{Module, ModuleContext};
 use mocu_input::{GilrsSource, InputConfig, InputModule, ScriptedSource};
 use mocu_layout::{Layout, LayoutConfig, MemorySink};
 use mocu_sim::{Sim, SimConfig};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// Waits (without asserting on time) until `f` holds; gives up after 20 s.
-fn eventually(what: &str, mut f: impl FnMut() -> bool) {
-    let t = Instant::now();
+/// Waits until `f` holds, checking it again at each change of `object`'s properties (the
+/// event it waits for); the 20 s bound only turns a hang into a failure.
+fn eventually(ds: &DataServer, object: Guid, what: &str, mut f: impl FnMut() -> bool) {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let sub = ds
+        .subscribe(Topic::properties(object), move |_| {
+            let _ = tx.send(());
+        })
+        .unwrap();
     while !f() {
-        assert!(t.elapsed() < Duration::from_secs(20), "never: {what}");
-        std::thread::sleep(Duration::from_millis(5));
+        if rx.recv_timeout(Duration::from_secs(20)).is_err() {
+            ds.unsubscribe(sub);
+            panic!("never: {what}");
+        }
     }
+    ds.unsubscribe(sub);
 }
 
 #[test]
@@ -28,8 +37,9 @@ fn gilrs_starts_cleanly_with_no_gamepad() {
     let ds = DataServer::default();
     let mut m = InputModule::new(InputConfig::default());
     m.start(&ModuleContext::detached("input", ds.clone())).unwrap();
-    std::thread::sleep(Duration::from_millis(150));
+    // Stopping joins the gilrs thread, which opens gilrs first (the probe above found no pad).
     m.stop();
+    ds.quiesce();
     assert!(ds.resolve(&["operator", "inputs", "gamepad1"]).is_none());
 }
 
@@ -55,7 +65,7 @@ fn a_scripted_gamepad_and_the_keyboard_drive_a_simulated_vehicle() {
     m.start(&ModuleContext::detached("input", ds.clone())).unwrap();
     let usv = ds.resolve(&["vehicles", "usv1"]).unwrap();
     let op = ds.resolve(&["operator"]).unwrap();
-    eventually("the first vehicle is selected", || {
+    eventually(&ds, op, "the first vehicle is selected", || {
         ds.try_get(op, PropName::new("selected")) == Some(Value::Guid(usv))
     });
     let sink = Arc::new(MemorySink::default());
@@ -69,11 +79,10 @@ fn a_scripted_gamepad_and_the_keyboard_drive_a_simulated_vehicle() {
     let layout = Layout::load(&ds, &program(text), LayoutConfig::default(), sink.clone()).unwrap();
     // The script starts when the bindings appear.
     let nav = ds.resolve(&["vehicles", "usv1", "nav"]).unwrap();
-    eventually("the stick drives the goal", || {
+    eventually(&ds, nav, "the stick drives the goal", || {
         ds.try_get(nav, PropName::new("goal_throttle")) == Some(Value::Float(75.0))
     });
-    eventually("south armed the vehicle", || {
-        sim.step(0.05);
+    eventually(&ds, usv, "south armed the vehicle", || {
         ds.try_get(usv, PropName::new("armed")) == Some(Value::Bool(true))
     });
     let pad = ds.resolve(&["operator", "inputs", "gamepad1"]).unwrap();
@@ -84,7 +93,7 @@ fn a_scripted_gamepad_and_the_keyboard_drive_a_simulated_vehicle() {
         ds.call_wait(kb, "key", vec![Value::str("space"), Value::Bool(true)], None).is_accepted()
     );
     ds.quiesce();
-    eventually("space stopped the vehicle (its goals back to 0)", || {
+    eventually(&ds, nav, "space stopped the vehicle (its goals back to 0)", || {
         ds.try_get(nav, PropName::new("goal_throttle")) == Some(Value::Float(0.0))
     });
     let calls = format!("{:?}", sink.of("call"));
