@@ -4,11 +4,12 @@
 use mocu_dataserver::*;
 use mocu_display::{BackendChoice, Display, DisplayOptions};
 use mocu_hotreload::*;
-use mocu_layout::{LayoutConfig, MemorySink};
+use mocu_layout::{EventSink, LayoutConfig, MemorySink};
 use mocu_widgets::{Library, RendererConfig, WidgetRenderer};
 use std::path::Path;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::sync::mpsc::{Receiver, Sender};
+use std::time::Duration;
 
 fn layout_text(colour: &str, width: u32, extra: &str) -> String {
     format!(
@@ -31,6 +32,21 @@ struct Rig {
     _dir: tempfile::TempDir,
     path: std::path::PathBuf,
     sink: Arc<MemorySink>,
+    /// A message each time a reload has done something a test may wait for.
+    reloaded: Receiver<()>,
+}
+
+/// Records into a `MemorySink` and says so on a channel: the reload outcome a test waits for.
+struct Signalling {
+    memory: Arc<MemorySink>,
+    tx: Sender<()>,
+}
+
+impl EventSink for Signalling {
+    fn record(&self, event: &str, fields: &[(&str, Value)]) {
+        self.memory.record(event, fields);
+        let _ = self.tx.send(());
+    }
 }
 
 fn rig(text: &str) -> Rig {
@@ -54,6 +70,8 @@ fn rig_in(dir: tempfile::TempDir, text: &str) -> Rig {
         .unwrap(),
     );
     let r2 = renderer.clone();
+    let (tx, reloaded) = std::sync::mpsc::channel();
+    let tx2 = tx.clone();
     let options = ReloaderOptions {
         config: LayoutConfig {
             screen: (320.0, 200.0),
@@ -65,11 +83,20 @@ fn rig_in(dir: tempfile::TempDir, text: &str) -> Rig {
             if let Ok(lib) = Library::compile(p, true) {
                 r2.replace_library(lib);
             }
+            // The last step of a good reload.
+            let _ = tx2.send(());
         })),
     };
     let sink = Arc::new(MemorySink::default());
-    let reloader = Reloader::start(&ds, &path, &bundle, options, sink.clone()).unwrap();
-    Rig { ds, reloader, display, _renderer: renderer, _dir: dir, path, sink }
+    let signalling = Arc::new(Signalling { memory: sink.clone(), tx: tx.clone() });
+    let reloader = Reloader::start(&ds, &path, &bundle, options, signalling).unwrap();
+    // A refused or failed reload ends by raising the banner.
+    let diagnostics = ds.resolve(&["operator", "diagnostics"]).unwrap();
+    ds.subscribe(Topic::properties(diagnostics), move |_| {
+        let _ = tx.send(());
+    })
+    .unwrap();
+    Rig { ds, reloader, display, _renderer: renderer, _dir: dir, path, sink, reloaded }
 }
 
 impl Rig {
@@ -87,12 +114,21 @@ impl Rig {
         self.ds.try_get(a, PropName::new("w"))
     }
 
+    /// Waits until `f` holds, checking it after each reload (the file watcher's event, then
+    /// the reload, are what it waits for); the 30 s bound only turns a hang into a failure.
     fn wait(&mut self, what: &str, mut f: impl FnMut(&mut Rig) -> bool) {
-        let t0 = Instant::now();
         while !f(self) {
-            assert!(t0.elapsed() < Duration::from_secs(10), "timed out waiting for {what}");
-            std::thread::sleep(Duration::from_millis(10));
+            if self.reloaded.recv_timeout(Duration::from_secs(30)).is_err() {
+                panic!("no reload brought {what}");
+            }
         }
+    }
+
+    fn banner_active(&self) -> bool {
+        self.ds
+            .resolve(&["operator", "diagnostics"])
+            .and_then(|d| self.ds.try_get(d, PropName::new("active")))
+            == Some(Value::Bool(true))
     }
 }
 
@@ -121,7 +157,7 @@ fn saving_a_layout_changes_the_display_and_the_frame_at_once() {
     r.wait("the new width", |r| r.width_of_a() == Some(Value::Float(150.0)));
     // Deleted and created again.
     std::fs::remove_file(&r.path).unwrap();
-    std::thread::sleep(Duration::from_millis(60));
+    r.wait("the missing file reported", |r| r.banner_active());
     std::fs::write(&r.path, layout_text("#ffff00", 150, "")).unwrap();
     r.wait("yellow", |r| r.frame() == (255, 255, 0));
     assert!(!r.sink.of("reload").is_empty());
