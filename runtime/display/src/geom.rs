@@ -115,21 +115,28 @@ impl IRect {
     }
 
     pub fn right(&self) -> i32 {
-        self.x + self.w
+        self.x.saturating_add(self.w)
     }
 
     pub fn bottom(&self) -> i32 {
-        self.y + self.h
+        self.y.saturating_add(self.h)
     }
 
     pub fn area(&self) -> i64 {
         self.w as i64 * self.h as i64
     }
 
+    /// The common part; when there is none, both sides are zero (never a rectangle with
+    /// rows but no columns, whose row range a caller could walk).
     pub fn intersect(&self, o: &IRect) -> IRect {
         let x = self.x.max(o.x);
         let y = self.y.max(o.y);
-        IRect::new(x, y, self.right().min(o.right()) - x, self.bottom().min(o.bottom()) - y)
+        let w = self.right().min(o.right()).saturating_sub(x);
+        let h = self.bottom().min(o.bottom()).saturating_sub(y);
+        if w <= 0 || h <= 0 {
+            return IRect::new(x, y, 0, 0);
+        }
+        IRect::new(x, y, w, h)
     }
 
     /// The bounding box of both (an empty side is ignored).

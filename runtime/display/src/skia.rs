@@ -206,40 +206,63 @@ impl SkiaCanvas {
 
     /// Draws a shaped run with its top-left corner at pixmap pixel `(ox, oy)`: the run's
     /// cached coverage mask blended in one pass (glyph by glyph only for colour glyphs).
+    ///
+    /// Any origin is accepted, far outside the pixmap included: every row and column
+    /// touched is in the intersection of the image, the clip and the pixmap, and an
+    /// empty intersection (an image wholly beside the clip but level with it) draws
+    /// nothing.
     fn blit_text(&mut self, run: &text::ShapedRun, ox: i32, oy: i32, color: Color) {
+        let clip = self.state.clip.intersect(&self.full());
+        if clip.is_empty() {
+            return;
+        }
         self.ready();
-        let clip = self.state.clip;
         let pw = self.pixmap.width() as usize;
         let pre = pixel::premultiply(color);
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         if let Some(m) = text::with_engine(|e| e.mask(run)) {
-            let (mx0, my0) = (ox + m.left, oy + m.top);
-            let r = IRect::new(mx0, my0, m.width as i32, m.height as i32).intersect(&clip);
+            let (mx0, my0) = (ox.saturating_add(m.left), oy.saturating_add(m.top));
+            let (mw, mh) =
+                (m.width.min(i32::MAX as usize) as i32, m.height.min(i32::MAX as usize) as i32);
+            let r = IRect::new(mx0, my0, mw, mh).intersect(&clip);
+            if r.is_empty() || m.data.len() < m.width * m.height {
+                return;
+            }
+            let (cx, w) = ((r.x - mx0) as usize, r.w as usize);
             for y in r.y..r.bottom() {
-                let mrow = &m.data[(y - my0) as usize * m.width + (r.x - mx0) as usize..];
-                let row = &mut px[y as usize * pw + r.x as usize..][..r.w as usize];
-                pixel::cover_row(row, pre, &mrow[..r.w as usize]);
+                let mrow = &m.data[(y - my0) as usize * m.width + cx..][..w];
+                let row = &mut px[y as usize * pw + r.x as usize..][..w];
+                pixel::cover_row(row, pre, mrow);
             }
             return;
         }
         text::with_engine(|e| {
             for g in &run.glyphs {
                 let Some(img) = e.glyph(g.key) else { continue };
-                let gx = ox + g.x + img.left;
-                let gy = oy + g.y - img.top;
-                let r = IRect::new(gx, gy, img.width as i32, img.height as i32).intersect(&clip);
+                let (iw, ih) = (img.width as usize, img.height as usize);
+                if img.data.len() < iw * ih * if img.color { 4 } else { 1 } {
+                    continue;
+                }
+                let gx = ox.saturating_add(g.x).saturating_add(img.left);
+                let gy = oy.saturating_add(g.y).saturating_sub(img.top);
+                let (gw, gh) = (iw.min(i32::MAX as usize) as i32, ih.min(i32::MAX as usize) as i32);
+                let r = IRect::new(gx, gy, gw, gh).intersect(&clip);
+                if r.is_empty() {
+                    continue;
+                }
+                let cx = (r.x - gx) as usize;
                 for y in r.y..r.bottom() {
                     let my = (y - gy) as usize;
                     let row = &mut px[y as usize * pw + r.x as usize..][..r.w as usize];
                     for (i, d) in row.iter_mut().enumerate() {
-                        let mx = (r.x - gx) as usize + i;
+                        let mx = cx + i;
                         if img.color {
                             // swash colour glyphs are straight RGBA.
-                            let s = &img.data[(my * img.width as usize + mx) * 4..][..4];
+                            let s = &img.data[(my * iw + mx) * 4..][..4];
                             let a = pixel::div255(s[3] as u32 * color.a as u32) as u8;
                             pixel::over(d, pixel::premultiply(Color::rgba(s[0], s[1], s[2], a)));
                         } else {
-                            let k = img.data[my * img.width as usize + mx];
+                            let k = img.data[my * iw + mx];
                             pixel::over_coverage(d, pre, k);
                         }
                     }
@@ -481,7 +504,10 @@ impl Canvas for SkiaCanvas {
             // half pixel after the move went the other way in a damage repaint whose
             // pixmap starts below the text's top, shifting the text by one pixel there.
             let o = self.state.transform.apply(Point::new(user_box.x, user_box.y));
-            let (ox, oy) = (o.x.round() as i32 - self.origin.0, o.y.round() as i32 - self.origin.1);
+            let (ox, oy) = (
+                (o.x.round() as i32).saturating_sub(self.origin.0),
+                (o.y.round() as i32).saturating_sub(self.origin.1),
+            );
             self.blit_text(&run, ox, oy, style.color);
         } else {
             // Rotated or skewed: rasterise the run upright, then draw it transformed.
