@@ -262,18 +262,11 @@ fn the_compiler_reads_files_only_in_fs_rs() {
     assert!(errors.is_empty(), "{}", errors.join("\n"));
 }
 
-/// Test files that still sleep to wait for time.
-// FIXME: each of these waits for a condition by sleeping; give it a clock it can advance
-// or a channel to wait on, then remove it from this list.
-const SLEEPING_TESTS: &[&str] = &[];
-
+/// A test waits on a channel, a notification or a clock it advances, never by sleeping.
 #[test]
 fn no_test_sleeps_to_wait_for_time() {
     let mut errors = Vec::new();
     for f in rust_files().into_iter().filter(|f| is_test_file(&f.rel)) {
-        if SLEEPING_TESTS.contains(&f.rel.as_str()) {
-            continue;
-        }
         for (n, line) in code_only(&f.text).lines().enumerate() {
             if line.contains("sleep(") {
                 errors.push(format!("{}:{}: a test sleeps", f.rel, n + 1));
@@ -283,18 +276,12 @@ fn no_test_sleeps_to_wait_for_time() {
     assert!(errors.is_empty(), "{}", errors.join("\n"));
 }
 
-/// Test files that still assert a wall-clock bound.
-// FIXME: timings belong in benches/ (criterion, against a baseline); a test checks the
-// order of events on a clock it controls. Remove each file once it does.
-const TIMED_TESTS: &[&str] = &[];
-
+/// Timings belong in benches/ (criterion, against a baseline); a test checks what happened,
+/// and in which order, on a clock it controls.
 #[test]
 fn no_test_asserts_a_wall_clock_bound() {
     let mut errors = Vec::new();
     for f in rust_files().into_iter().filter(|f| is_test_file(&f.rel)) {
-        if TIMED_TESTS.contains(&f.rel.as_str()) {
-            continue;
-        }
         let code = code_only(&f.text);
         for (at, arg) in assertions(&code) {
             if arg.contains("elapsed") || arg.contains("Instant") {
