@@ -33,6 +33,12 @@ pub mod syntax_hints;
 pub mod types;
 
 pub use bundle::{Bundle, BundleError, Layout};
+
+/// Stack for a thread that checks, compiles or loads a layout: expressions up to
+/// `passes::check_depth::MAX_DEPTH` levels recurse in the passes and the lowering, which
+/// overflows a default 2 MiB thread stack (the main thread has 8 MiB). Spawn such threads
+/// with `std::thread::Builder::new().stack_size(COMPILER_STACK)`.
+pub const COMPILER_STACK: usize = 64 << 20;
 pub use diagnostics::{Diagnostic, Diagnostics, Severity};
 pub use fs::FsLoader;
 pub use profile::Profile;

@@ -182,9 +182,15 @@ fn publish_reload_method(inner: &Arc<Inner>) {
                 return CallOutcome::Failed("no layout".into());
             };
             // Checking and compiling take a while: off the caller's thread.
-            std::thread::spawn(move || {
-                inner.reload();
-            });
+            let spawned = std::thread::Builder::new()
+                .name("mocu-reload".into())
+                .stack_size(mocu_language::COMPILER_STACK)
+                .spawn(move || {
+                    inner.reload();
+                });
+            if let Err(e) = spawned {
+                return CallOutcome::Failed(format!("cannot start the reload: {e}"));
+            }
             CallOutcome::Accepted(vec![])
         },
     );

@@ -40,6 +40,7 @@ pub(crate) fn start(inner: &Arc<Inner>) -> Result<(), String> {
     let weak = Arc::downgrade(inner);
     std::thread::Builder::new()
         .name("mocu-hot-reload".into())
+        .stack_size(mocu_language::COMPILER_STACK)
         .spawn(move || run(weak, rx))
         .map_err(|e| e.to_string())?;
     Ok(())
