@@ -156,7 +156,8 @@ fn each_distinct_path_is_subscribed_once() {
 
 #[test]
 fn with_nothing_changing_the_runtime_does_no_work() {
-    let ds = DataServer::default();
+    let clock = ManualClock::new();
+    let ds = DataServer::with_clock(Config::default(), Arc::new(clock.clone()));
     let (_v, nav) = vehicle(&ds, "usv1");
     let p = program(&format!(
         "{GAUGE}\nwatch fast {{ when usv.nav.speed > 30 for 50ms then alert warning \"fast\" }}"
@@ -164,13 +165,15 @@ fn with_nothing_changing_the_runtime_does_no_work() {
     let layout = Layout::load(&ds, &p, config(true), Arc::new(NullSink)).unwrap();
     ds.set(nav, "speed", Value::Float(1.0)).unwrap();
     layout.settle();
-    std::thread::sleep(Duration::from_millis(30));
+    clock.advance(Duration::from_millis(10)); // the tick already posted
+    layout.settle();
     let (evals, fired, jobs) = (
         layout.stats().evaluations,
         ds.stats().timer_fired.load(std::sync::atomic::Ordering::SeqCst),
         ds.stats().jobs_run.load(std::sync::atomic::Ordering::SeqCst),
     );
-    std::thread::sleep(Duration::from_millis(300));
+    clock.advance(Duration::from_millis(300)); // fires whatever would be due by then
+    ds.quiesce();
     assert_eq!(layout.stats().evaluations, evals, "no evaluation while idle");
     assert_eq!(
         ds.stats().timer_fired.load(std::sync::atomic::Ordering::SeqCst),
@@ -209,7 +212,8 @@ fn unloading_removes_every_object_and_subscription_even_after_a_thousand_cycles(
 
 #[test]
 fn a_watch_fires_after_its_hold_time_and_clears_when_the_condition_ends() {
-    let ds = DataServer::default();
+    let clock = ManualClock::new();
+    let ds = DataServer::with_clock(Config::default(), Arc::new(clock.clone()));
     let (v, _nav) = vehicle(&ds, "usv1");
     ds.set(v, "fuel", Value::Float(0.9)).unwrap();
     let sink = Arc::new(MemorySink::default());
@@ -227,14 +231,12 @@ fn a_watch_fires_after_its_hold_time_and_clears_when_the_condition_ends() {
     layout.settle();
     ds.set(v, "fuel", Value::Float(0.1)).unwrap();
     layout.settle();
-    std::thread::sleep(Duration::from_millis(80));
-    assert!(sink.of("alert").is_empty(), "not before the hold time");
-    let t0 = std::time::Instant::now();
-    while sink.of("alert").is_empty() {
-        assert!(t0.elapsed() < Duration::from_secs(5), "the watch never fired");
-        std::thread::sleep(Duration::from_millis(5));
-    }
+    clock.advance(Duration::from_millis(80));
     layout.settle();
+    assert!(sink.of("alert").is_empty(), "not before the hold time");
+    clock.advance(Duration::from_millis(80));
+    settle_until(&layout, || !sink.of("alert").is_empty());
+    assert_eq!(sink.of("alert").len(), 1, "fired once the hold time is over");
     let alerts = ds.resolve(&["operator", "alerts"]).unwrap();
     let a = ds.children(alerts).unwrap()[0];
     assert_eq!(ds.get(a, "text").unwrap(), Value::str("Fuel low on usv1"));
@@ -350,12 +352,16 @@ fn a_template_gives_each_discovered_vehicle_its_own_strip() {
     assert_eq!(ds.get(s2, "y").unwrap(), Value::Float(20.0), "moves up when the first goes");
 }
 
-fn wait_for(what: &str, mut f: impl FnMut() -> bool) {
-    let t0 = std::time::Instant::now();
-    while !f() {
-        assert!(t0.elapsed() < Duration::from_secs(5), "timed out waiting for {what}");
-        std::thread::sleep(Duration::from_millis(5));
+/// Settles (a bounded number of rounds, no clock) until `f` holds: actions of a watch run
+/// on the layout's executor after the evaluation that fired it.
+fn settle_until(layout: &Layout, mut f: impl FnMut() -> bool) {
+    for _ in 0..50 {
+        if f() {
+            return;
+        }
+        layout.settle();
     }
+    assert!(f(), "still not so after 50 settles");
 }
 
 #[test]
@@ -380,33 +386,10 @@ fn a_watch_with_clear_when_stays_active_until_the_clear_condition_holds() {
     assert_eq!(ds.get(watch, "state").unwrap(), Value::str("idle"));
     ds.set(v, "temp", Value::Float(95.0)).unwrap();
     layout.settle();
-    wait_for("the second alert", || sink.of("alert").len() == 2);
+    settle_until(&layout, || sink.of("alert").len() == 2);
 }
 
-#[test]
-fn a_level_triggered_watch_repeats_while_active_and_snooze_holds_it_off() {
-    let ds = DataServer::default();
-    let (v, _nav) = vehicle(&ds, "usv1");
-    ds.set(v, "link", Value::Float(1.0)).unwrap();
-    let sink = Arc::new(MemorySink::default());
-    let p = program(
-        "watch lost { when root.vehicles.usv1.link < 0.1 repeat every 40ms then alert critical \"link\" }",
-    );
-    let layout = Layout::load(&ds, &p, config(true), sink.clone()).unwrap();
-    ds.set(v, "link", Value::Float(0.0)).unwrap();
-    layout.settle();
-    wait_for("three repeats", || sink.of("alert").len() >= 3);
-    let watch = ds.resolve(&["operator", "watches", "lost"]).unwrap();
-    assert!(ds.call_wait(watch, "snooze", vec![Value::Float(300.0)], None).is_accepted());
-    let n = sink.of("alert").len();
-    std::thread::sleep(Duration::from_millis(150));
-    assert!(sink.of("alert").len() <= n + 1, "snoozed: no repeats");
-    ds.set(v, "link", Value::Float(1.0)).unwrap();
-    layout.settle();
-    let n = sink.of("alert").len();
-    std::thread::sleep(Duration::from_millis(150));
-    assert_eq!(sink.of("alert").len(), n, "cleared: repeats stop");
-}
+// Repeats and snooze on a manual clock: tests/snooze.rs.
 
 #[test]
 fn an_interpolated_label_shows_a_dash_for_each_absent_part_and_keeps_the_rest() {
