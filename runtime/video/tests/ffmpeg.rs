@@ -4,7 +4,9 @@
 
 mod peer;
 
-use mocu_dataserver::{Call, DataServer, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Value};
+use mocu_dataserver::{
+    Call, DataServer, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Topic, Value,
+};
 use mocu_host::{Module, ModuleContext};
 use mocu_video::{FrameMsg, ReceiverConfig, VideoReceiver};
 use peer::{Ffmpeg, Kind, check_bars};
@@ -96,10 +98,17 @@ fn check_stream(kind: Kind, w: u32, h: u32, name: &str) {
     assert!(got.windows(2).all(|p| p[1].frame > p[0].frame));
     // Statistics reach the camera within a publishing period.
     let prop = |k: &str| r.ds.get(r.camera, k).unwrap();
-    let end = Instant::now() + Duration::from_secs(3);
-    while prop("frames").as_i64().unwrap() < 10 && Instant::now() < end {
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    let (tx, published) = mpsc::channel();
+    let sub =
+        r.ds.subscribe(Topic::property_names(r.camera, &["frames"]), move |_| {
+            let _ = tx.send(());
+        })
+        .unwrap();
+    // The wait is on the publication; its bound only turns a hang into a failure.
+    while prop("frames").as_i64().unwrap() < 10
+        && published.recv_timeout(Duration::from_secs(15)).is_ok()
+    {}
+    r.ds.unsubscribe(sub);
     assert_eq!(prop("width"), Value::Int(w as i64));
     assert_eq!(prop("height"), Value::Int(h as i64));
     assert!(prop("frames").as_i64().unwrap() >= 10, "frames {:?}", prop("frames"));

@@ -91,14 +91,9 @@ impl Ffmpeg {
 
 impl Drop for Ffmpeg {
     fn drop(&mut self) {
+        // `timeout` passes the TERM on to ffmpeg and, with `-k 2`, kills it 2 s later if it
+        // is still running: waiting for the exit is bounded.
         let _ = Command::new("kill").args(["-TERM", &self.child.id().to_string()]).status();
-        for _ in 0..40 {
-            if self.child.try_wait().ok().flatten().is_some() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(50));
-        }
-        let _ = self.child.kill();
         let _ = self.child.wait();
     }
 }
