@@ -9,6 +9,7 @@
 //! becomes the `{error}` type, which is accepted everywhere (no cascades).
 
 use super::check_durations::Use;
+use super::let_size::{SizeGuard, Verdict};
 use super::{DefId, Definitions, ModuleId, Modules, component_item, let_item};
 use crate::ast::{self, BinOp, ExprKind, Item, LitUnit, StrPart, UnOp};
 use crate::builtins::{self, Returns};
@@ -35,6 +36,7 @@ pub fn check_types(
         schema,
         diags,
         top_lets: HashMap::new(),
+        size: SizeGuard::default(),
         program: Program::default(),
         mode_refs: Vec::new(),
     };
@@ -50,14 +52,18 @@ pub fn check_types(
 struct Scope {
     module: ModuleId,
     limit: Option<usize>,
-    locals: Vec<(String, Expr)>,
+    /// Names in scope with their values and the values' expanded sizes (`let_size`).
+    locals: Vec<(String, Expr, usize)>,
     self_type: Option<Option<String>>,
 }
 
 impl Scope {
     fn with(&self, name: &str, e: Expr) -> Scope {
+        self.with_sized(name, e, 1)
+    }
+    fn with_sized(&self, name: &str, e: Expr, size: usize) -> Scope {
         let mut s = self.clone();
-        s.locals.push((name.to_string(), e));
+        s.locals.push((name.to_string(), e, size));
         s
     }
 }
@@ -67,7 +73,9 @@ struct Typer<'a, 'd> {
     defs: &'a Definitions,
     schema: &'a Schema,
     diags: &'d mut Diagnostics,
-    top_lets: HashMap<DefId, Expr>,
+    /// Top-level `let` values, lowered once, with their expanded sizes.
+    top_lets: HashMap<DefId, (Expr, usize)>,
+    size: SizeGuard,
     program: Program,
     /// `mode NAME` actions, checked against the declared modes at the end (E0212).
     mode_refs: Vec<(String, Span)>,
@@ -92,7 +100,7 @@ impl Typer<'_, '_> {
         for (i, item) in self.modules[m].ast.items.iter().enumerate() {
             if let Item::Let(_) = item {
                 // Lowered (and so checked) even when unused; uses reuse this result.
-                self.top_let(DefId { module: m, item: i, inner: None });
+                self.lower_top_let(DefId { module: m, item: i, inner: None });
             }
             self.item(item, &base, &mut sink);
         }
@@ -252,7 +260,7 @@ impl Typer<'_, '_> {
                 for it in &e.items {
                     if let Item::Let(l) = it {
                         let v = self.lower(&l.value, &s);
-                        s = s.with(&l.name.name, v);
+                        s = s.with_sized(&l.name.name, v, self.size.last());
                     } else {
                         self.item(it, &s, &mut inner);
                     }
@@ -409,11 +417,13 @@ impl Typer<'_, '_> {
             schema: self.schema,
             diags: &mut scratch,
             top_lets: std::mem::take(&mut self.top_lets),
+            size: std::mem::take(&mut self.size),
             program: Program::default(),
             mode_refs: Vec::new(),
         };
         let r = f(&mut t);
         self.top_lets = t.top_lets;
+        self.size = t.size;
         r
     }
 
@@ -500,7 +510,7 @@ impl Typer<'_, '_> {
             match stmt {
                 ast::Stmt::Let(l) => {
                     let v = self.lower(&l.value, &s);
-                    s = s.with(&l.name.name, v);
+                    s = s.with_sized(&l.name.name, v, self.size.last());
                 }
                 ast::Stmt::Primitive(p) => {
                     if let Some(shape) = self.primitive(p, &s) {
@@ -834,15 +844,30 @@ impl Typer<'_, '_> {
         }
     }
 
-    fn top_let(&mut self, id: DefId) -> Option<Expr> {
-        if let Some(e) = self.top_lets.get(&id) {
-            return Some(e.clone());
+    /// Lowers a top-level `let` once (its expression is checked there); `None` if `id` is
+    /// not a `let`.
+    fn lower_top_let(&mut self, id: DefId) -> Option<()> {
+        if !self.top_lets.contains_key(&id) {
+            let l = let_item(self.modules, id)?;
+            let scope = Scope { module: id.module, limit: Some(id.item), ..Scope::default() };
+            let saved = self.size.set_aside();
+            let e = self.lower(&l.value, &scope);
+            let size = self.size.restore(saved);
+            self.top_lets.insert(id, (e, size));
         }
-        let l = let_item(self.modules, id)?;
-        let scope = Scope { module: id.module, limit: Some(id.item), ..Scope::default() };
-        let e = self.lower(&l.value, &scope);
-        self.top_lets.insert(id, e.clone());
-        Some(e)
+        Some(())
+    }
+
+    /// A top-level `let`'s value where it is used (`span`): `{error}` when copying it would
+    /// take the expression over the size bounds (`let_size`).
+    fn top_let(&mut self, id: DefId, span: Span) -> Option<Expr> {
+        self.lower_top_let(id)?;
+        let (e, size) = &self.top_lets[&id];
+        Some(if self.size.use_let(*size) {
+            Expr { span, ..e.clone() }
+        } else {
+            mk(Type::ERROR, Node::Bool(false), span)
+        })
     }
 
     fn path_type(&self, p: &Path) -> Type {
@@ -860,7 +885,18 @@ impl Typer<'_, '_> {
         }
     }
 
+    /// Lowers `e`, counting its nodes with `let`s put in place (`let_size`): an expression
+    /// over the bounds is reported and becomes `{error}`.
     fn lower(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
+        self.size.enter();
+        let out = self.lower_node(e, scope);
+        match self.size.leave(e.span, self.diags) {
+            Verdict::Keep(_) => out,
+            Verdict::Refuse => mk(Type::ERROR, Node::Bool(false), e.span),
+        }
+    }
+
+    fn lower_node(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
         let span = e.span;
         match &e.kind {
             ExprKind::Number { value, unit } => match unit {
@@ -895,13 +931,18 @@ impl Typer<'_, '_> {
                 None => mk(Type::ERROR, Node::Bool(false), span),
             },
             ExprKind::Name(n) => {
-                if let Some((_, local)) = scope.locals.iter().rev().find(|(name, _)| name == n) {
+                if let Some((_, local, size)) =
+                    scope.locals.iter().rev().find(|(name, _, _)| name == n)
+                {
+                    if !self.size.use_let(*size) {
+                        return mk(Type::ERROR, Node::Bool(false), span);
+                    }
                     return Expr { span, ..local.clone() };
                 }
                 if let Some(id) = self.defs.find_let(self.modules, scope.module, n, scope.limit)
-                    && let Some(v) = self.top_let(id)
+                    && let Some(v) = self.top_let(id, span)
                 {
-                    return Expr { span, ..v };
+                    return v;
                 }
                 if n == "selected" {
                     return mk(
@@ -929,7 +970,7 @@ impl Typer<'_, '_> {
             }
             ExprKind::Field(base, field) => {
                 if let ExprKind::Name(ns) = &base.kind {
-                    let shadowed = scope.locals.iter().any(|(n, _)| n == ns)
+                    let shadowed = scope.locals.iter().any(|(n, _, _)| n == ns)
                         || self
                             .defs
                             .find_let(self.modules, scope.module, ns, scope.limit)
@@ -938,8 +979,8 @@ impl Typer<'_, '_> {
                         (shadowed, self.defs.namespace(self.modules, scope.module, ns))
                     {
                         let id = self.defs.lets[target].get(&field.name).copied();
-                        return match id.and_then(|id| self.top_let(id)) {
-                            Some(v) => Expr { span, ..v },
+                        return match id.and_then(|id| self.top_let(id, span)) {
+                            Some(v) => v,
                             None => mk(Type::ERROR, Node::Bool(false), span),
                         };
                     }
