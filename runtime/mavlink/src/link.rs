@@ -201,7 +201,7 @@ impl Link {
         let (g, n) = (v.guid, v.nav);
         match msg {
             MavMessage::HEARTBEAT(hb) => {
-                v.last_heartbeat = Instant::now();
+                v.last_heartbeat = ds.now();
                 v.autopilot = hb.autopilot;
                 if v.lost {
                     v.lost = false;
@@ -407,7 +407,7 @@ impl Link {
             addr: None,
             family,
             autopilot: hb.autopilot,
-            last_heartbeat: Instant::now(),
+            last_heartbeat: ds.now(),
             lost: false,
             last_seq: None,
             rx_w: 0.0,
@@ -801,7 +801,9 @@ impl Link {
         let mut st = self.inner.state.lock();
         let mut targets = Vec::new();
         for v in st.vehicles.values_mut() {
-            if !v.lost && v.last_heartbeat.elapsed() > self.inner.cfg.link_timeout {
+            // On the DataServer's clock: a test advances it instead of waiting.
+            let silent = ds.now().saturating_duration_since(v.last_heartbeat);
+            if !v.lost && silent > self.inner.cfg.link_timeout {
                 v.lost = true;
                 let _ = ds.set(v.guid, "link_lost", Value::Bool(true));
                 let _ = ds.set(v.guid, "stale", Value::Bool(true));
