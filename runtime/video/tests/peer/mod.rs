@@ -4,7 +4,6 @@
 #![allow(dead_code)]
 
 use std::process::{Child, Command, Stdio};
-use std::time::Duration;
 
 /// What a missing peer says: the test fails (it does not skip) and names the package.
 pub fn require_ffmpeg() {
