@@ -52,10 +52,10 @@ pub use paint::{
     PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, pointer_spec, with_canvas,
 };
 pub use path::{Path, PathBuilder, PathEl};
-pub use skia::SkiaCanvas;
-pub use text::{FAMILY, measure as measure_text};
 #[cfg(feature = "gpu")]
 pub use present::{WindowPath, choose_path};
+pub use skia::SkiaCanvas;
+pub use text::{FAMILY, measure as measure_text};
 #[cfg(feature = "gpu")]
 pub use window::{WindowOptions, WindowStop, run_window};
 pub use wm::{FrameStats, Hit, PAINT_ERROR, WINDOW_TYPE, WinProps, WindowManager};

@@ -838,8 +838,7 @@ impl Shared {
     ) -> Result<Vec<(Guid, usize)>, LoadError> {
         let mut made = Vec::new();
         let suffix = self.instance_suffix(st, instance);
-        let mut order = first_order + st.windows.len();
-        for w in windows {
+        for (order, w) in (first_order + st.windows.len()..).zip(windows) {
             let name = match &suffix {
                 Some(s) => format!("{}@{s}", w.name),
                 None => w.name.clone(),
@@ -856,7 +855,6 @@ impl Shared {
                 let text = self.path_from(st, base, objs, instance);
                 let _ = self.ds.set(g, "source", Value::str(&text));
             }
-            order += 1;
             let targets =
                 WINDOW_OUTPUTS.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
             let cell = self.add_cell(st, &w.f, targets, instance);
