@@ -1,23 +1,10 @@
 //! Alerts and failed commands always reach the operator: the world model, the log, and a
 //! built-in alert window unless the layout places an `AlertLayer` itself.
+mod common;
+use common::{config, program};
 use mocu_dataserver::*;
 use mocu_layout::*;
 use std::sync::Arc;
-use std::time::Duration;
-
-fn program(text: &str) -> mocu_language::Program {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("test.mocu");
-    std::fs::write(&path, text).unwrap();
-    match mocu_language::load_target(&path) {
-        Ok((bundle, _)) => bundle.layouts.into_iter().next().unwrap().program,
-        Err(e) => panic!("layout does not check:\n{e}"),
-    }
-}
-
-fn config() -> LayoutConfig {
-    LayoutConfig { tick: Duration::from_millis(1), ..LayoutConfig::default() }
-}
 
 const STOP_BUTTON: &str = r#"
 use "stdlib/controls.mocu"

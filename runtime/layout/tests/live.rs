@@ -1,20 +1,12 @@
 //! Layouts running live against the DataServer through compiled code.
+mod common;
+use common::program;
 use mocu_dataserver::*;
 use mocu_layout::*;
 use std::sync::Arc;
 use std::time::Duration;
 
 /// Checks a layout written in a temporary file (so `use "stdlib/…"` resolves).
-fn program(text: &str) -> mocu_language::Program {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("test.mocu");
-    std::fs::write(&path, text).unwrap();
-    match mocu_language::load_target(&path) {
-        Ok((bundle, _)) => bundle.layouts.into_iter().next().unwrap().program,
-        Err(e) => panic!("layout does not check:\n{e}"),
-    }
-}
-
 fn config(jit: bool) -> LayoutConfig {
     LayoutConfig { tick: Duration::from_millis(1), jit, ..LayoutConfig::default() }
 }

@@ -1,19 +1,11 @@
 //! Watches on the DataServer's manual clock: repeat and snooze fire exactly when the clock
 //! says, and no snooze length — infinite, NaN, negative — panics.
+mod common;
+use common::program;
 use mocu_dataserver::*;
 use mocu_layout::*;
 use std::sync::Arc;
 use std::time::Duration;
-
-fn program(text: &str) -> mocu_language::Program {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("test.mocu");
-    std::fs::write(&path, text).unwrap();
-    match mocu_language::load_target(&path) {
-        Ok((bundle, _)) => bundle.layouts.into_iter().next().unwrap().program,
-        Err(e) => panic!("layout does not check:\n{e}"),
-    }
-}
 
 const LOST: &str =
     "watch lost { when root.v.link < 0.1 repeat every 40ms then alert critical \"link\" }";

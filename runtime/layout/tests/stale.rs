@@ -1,23 +1,11 @@
 //! Stale means old, not unchanged: a widget is stale while a vehicle it reads from says its
 //! data is old (`stale` / `link_lost`), whatever its values do.
+mod common;
+use common::{config, program};
 use mocu_dataserver::*;
 use mocu_layout::*;
 use std::sync::Arc;
 use std::time::Duration;
-
-fn program(text: &str) -> mocu_language::Program {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("test.mocu");
-    std::fs::write(&path, text).unwrap();
-    match mocu_language::load_target(&path) {
-        Ok((bundle, _)) => bundle.layouts.into_iter().next().unwrap().program,
-        Err(e) => panic!("layout does not check:\n{e}"),
-    }
-}
-
-fn config() -> LayoutConfig {
-    LayoutConfig { tick: Duration::from_millis(1), ..LayoutConfig::default() }
-}
 
 const STRIPS: &str = r#"
 use "stdlib/gauges.mocu"
