@@ -166,6 +166,8 @@ fn saving_a_layout_changes_the_display_and_the_frame_at_once() {
 #[test]
 fn a_broken_save_keeps_the_last_good_layout_and_raises_the_banner_until_fixed() {
     let mut r = rig(&layout_text("#ff0000", 100, ""));
+    // Settled first: the first load's publications (the window's `revision`) are all in.
+    assert_eq!(r.frame(), (255, 0, 0));
     r.reloader.watch().unwrap();
     let before = r.ds.snapshot(r.ds.resolve(&["display", "hud"]).unwrap()).unwrap();
     // A partial write: the file is cut in the middle of a widget.
