@@ -25,16 +25,7 @@ impl SkiaCanvas {
         if ro <= 0.0 || color.a == 0 {
             return Some(());
         }
-        let bbox = IRect::covering(Rect::new(
-            c.x - ro - 1.0,
-            c.y - ro - 1.0,
-            2.0 * ro + 2.0,
-            2.0 * ro + 2.0,
-        ))
-        .intersect(&self.state.clip);
-        if bbox.is_empty() {
-            return Some(());
-        }
+        let Some(bbox) = self.disc_box(c, ro) else { return Some(()) };
         let solid = pixel::premultiply(color);
         self.ready();
         let w = self.pixmap.width() as usize;
@@ -103,6 +94,14 @@ impl SkiaCanvas {
 impl SkiaCanvas {
     /// The uniform scale of the device transform when it is a translate + uniform
     /// positive scale (the analytic rasterisers' precondition).
+    /// The pixels a disc of radius `ro` around `c` may touch (one pixel of anti-aliasing
+    /// around it), within the clip; `None` when nothing of it is visible.
+    fn disc_box(&self, c: Point, ro: f32) -> Option<IRect> {
+        let r = Rect::new(c.x - ro - 1.0, c.y - ro - 1.0, 2.0 * ro + 2.0, 2.0 * ro + 2.0);
+        let bbox = IRect::covering(r).intersect(&self.state.clip);
+        (!bbox.is_empty()).then_some(bbox)
+    }
+
     fn uniform_scale(&self) -> Option<f32> {
         let dev = self.device();
         (dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6).then_some(dev.sx)
@@ -145,16 +144,7 @@ impl SkiaCanvas {
         let round = stroke.cap == LineCap::Round;
         let (u0, u1) = ((a0.cos(), a0.sin()), (a1.cos(), a1.sin()));
         let caps = [(c.x + u0.0 * rm, c.y + u0.1 * rm), (c.x + u1.0 * rm, c.y + u1.1 * rm)];
-        let bbox = IRect::covering(Rect::new(
-            c.x - ro - 1.0,
-            c.y - ro - 1.0,
-            2.0 * ro + 2.0,
-            2.0 * ro + 2.0,
-        ))
-        .intersect(&self.state.clip);
-        if bbox.is_empty() {
-            return Some(());
-        }
+        let Some(bbox) = self.disc_box(c, ro) else { return Some(()) };
         let pre = pixel::premultiply(color);
         self.ready();
         let w = self.pixmap.width() as usize;
