@@ -18,10 +18,6 @@ fn wait<T>(rx: &Receiver<T>, what: &str) -> T {
     rx.recv_timeout(EVENTUALLY).unwrap_or_else(|_| panic!("never happened: {what}"))
 }
 
-fn object(ds: &DataServer, name: &str) -> Guid {
-    ds.create_object(ds.root(), ObjectInfo::new(name, "thing")).unwrap()
-}
-
 #[test]
 fn unsubscribe_nowait_returns_while_the_callback_waits_for_a_lock_the_caller_holds() {
     let ds = DataServer::default();
@@ -205,19 +201,8 @@ fn a_single_worker_blocked_for_good_still_lets_a_serial_executor_run() {
 /// An object with a method that counts its runs; the counter and the server's clock.
 fn counted(ds: &DataServer) -> (Guid, Arc<AtomicUsize>) {
     let o = object(ds, "target");
-    let runs = Arc::new(AtomicUsize::new(0));
-    let r = runs.clone();
-    ds.publish_method_fn(o, MethodSpec::new("m"), move |_| {
-        r.fetch_add(1, Ordering::SeqCst);
-        CallOutcome::Accepted(vec![])
-    })
-    .unwrap();
+    let runs = count_runs(ds, o);
     (o, runs)
-}
-
-fn manual() -> (DataServer, ManualClock) {
-    let clock = ManualClock::new();
-    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
 }
 
 #[test]

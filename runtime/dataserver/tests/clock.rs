@@ -1,15 +1,12 @@
 //! Time under control: a DataServer on a `ManualClock` fires timers, delayed calls and
 //! timeouts exactly when the clock is advanced past them, and stamps every write with the
 //! clock's time (`received_at`).
+mod common;
+use common::manual;
 use mocu_dataserver::*;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
-
-fn manual() -> (DataServer, ManualClock) {
-    let clock = ManualClock::new();
-    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
-}
 
 fn ms(n: u64) -> Duration {
     Duration::from_millis(n)

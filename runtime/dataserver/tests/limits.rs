@@ -1,6 +1,8 @@
 //! No argument makes the DataServer panic, and the edges of its promises hold: huge
 //! durations saturate, NaN over NaN is no change, stream counters only go up, and a sender
 //! blocked on a deleted receiver is let go.
+mod common;
+use common::{count_runs, manual, object};
 use crossbeam_channel::{Receiver, unbounded};
 use mocu_dataserver::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -13,26 +15,11 @@ fn wait<T>(rx: &Receiver<T>, what: &str) -> T {
     rx.recv_timeout(EVENTUALLY).unwrap_or_else(|_| panic!("never happened: {what}"))
 }
 
-fn object(ds: &DataServer, name: &str) -> Guid {
-    ds.create_object(ds.root(), ObjectInfo::new(name, "thing")).unwrap()
-}
-
-fn manual() -> (DataServer, ManualClock) {
-    let clock = ManualClock::new();
-    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
-}
-
 #[test]
 fn duration_max_as_delay_or_timeout_saturates_instead_of_panicking() {
     let (ds, clock) = manual();
     let o = object(&ds, "o");
-    let runs = Arc::new(AtomicUsize::new(0));
-    let r = runs.clone();
-    ds.publish_method_fn(o, MethodSpec::new("m"), move |_| {
-        r.fetch_add(1, Ordering::SeqCst);
-        CallOutcome::Accepted(vec![])
-    })
-    .unwrap();
+    let runs = count_runs(&ds, o);
     let r = runs.clone();
     ds.run_after(Duration::MAX, None, move || {
         r.fetch_add(1, Ordering::SeqCst);

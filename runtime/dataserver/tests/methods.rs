@@ -1,4 +1,6 @@
 //! Methods: call feedback, immediate / queued / delayed calls, timeouts, periodic work.
+mod common;
+use common::manual;
 use mocu_dataserver::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -106,11 +108,6 @@ fn immediate_calls_run_on_the_callers_thread_and_queued_calls_do_not() {
     let ran = ran_on.lock().unwrap();
     assert_eq!(ran[0], me);
     assert_ne!(ran[1], me);
-}
-
-fn manual() -> (DataServer, ManualClock) {
-    let clock = ManualClock::new();
-    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
 }
 
 #[test]
