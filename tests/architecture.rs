@@ -313,7 +313,6 @@ const MAX_LINES: usize = 800;
 const LONG_FILES: &[&str] = &[
     "compiler/language/src/passes/check_types.rs",
     "compiler/language/src/parser.rs",
-    "runtime/layout/src/graph.rs",
     "runtime/dataserver/tests/model_equivalence.rs",
     "runtime/widgets/src/renderer.rs",
     "runtime/display/src/wm.rs",
