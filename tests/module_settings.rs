@@ -27,6 +27,10 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
         ("video", "feeds") => "auto".into(),
         ("input", "gilrs") => false.into(),
         ("input", "script") | ("video", "camera") => "".into(),
+        ("video", "source") => "127.0.0.1".into(),
+        ("video", "silence_ms") | ("video", "max_width" | "max_height" | "max_unit_kb") => {
+            640.into()
+        }
         (_, "kind") => kind.into(),
         _ => match ty {
             SettingType::Int => 1.into(),

@@ -6,6 +6,7 @@
 //! for one camera; the `codec` module kind does it for a camera named in a profile.
 
 use crate::frame::{EncodedUnit, FrameMsg};
+use crate::limits::Limits;
 use crate::{now_us, resolve_path};
 use mocu_dataserver::{
     Call, DataServer, DsError, Executor, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Value,
@@ -57,10 +58,33 @@ impl DecodedFrame {
     }
 }
 
+/// Why a unit gave no picture.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum DecodeError {
+    /// The declared size is over the camera's limits: not decoded.
+    Refused { width: u32, height: u32 },
+    /// The decoder failed (corrupt or truncated data).
+    Failed(String),
+}
+
+impl std::fmt::Display for DecodeError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            DecodeError::Refused { width, height } => {
+                write!(f, "{width}x{height} is over the camera's size limit")
+            }
+            DecodeError::Failed(e) => f.write_str(e),
+        }
+    }
+}
+
 /// A decoder for one stream (it keeps the H.264 decoder's reference pictures).
 #[derive(Default)]
 pub struct Decoder {
     h264: Option<openh264::decoder::Decoder>,
+    /// The last H.264 SPS declared a size over the limits: units are refused until one
+    /// within them comes (the decoder never saw that SPS).
+    h264_refusing: bool,
 }
 
 impl Decoder {
@@ -68,42 +92,85 @@ impl Decoder {
         Decoder::default()
     }
 
-    /// Decodes one unit: a JPEG file, or an H.264 access unit (Annex B). `Ok(None)` when
-    /// the unit gave no picture (parameter sets only).
+    /// Decodes one unit within the default limits (see [`Decoder::decode_limited`]).
     pub fn decode(&mut self, codec: Codec, data: &[u8]) -> Result<Option<DecodedFrame>, String> {
+        self.decode_limited(codec, data, &Limits::default()).map_err(|e| e.to_string())
+    }
+
+    /// Decodes one unit: a JPEG file, or an H.264 access unit (Annex B). The size the unit
+    /// declares is checked against `limits` first. `Ok(None)` when the unit gave no
+    /// picture (parameter sets only).
+    pub fn decode_limited(
+        &mut self,
+        codec: Codec,
+        data: &[u8],
+        limits: &Limits,
+    ) -> Result<Option<DecodedFrame>, DecodeError> {
+        if data.len() > limits.max_unit_bytes {
+            return Err(DecodeError::Failed(format!("a unit of {} bytes", data.len())));
+        }
         match codec {
-            Codec::Jpeg => decode_jpeg(data).map(Some),
+            Codec::Jpeg => decode_jpeg_limited(data, limits).map(Some),
             Codec::H264 => {
+                if let Some((width, height)) = crate::h264::unit_size(data) {
+                    self.h264_refusing = !limits.allows(width, height);
+                    if self.h264_refusing {
+                        return Err(DecodeError::Refused { width, height });
+                    }
+                } else if self.h264_refusing {
+                    return Err(DecodeError::Refused { width: 0, height: 0 });
+                }
                 if self.h264.is_none() {
-                    self.h264 = Some(openh264::decoder::Decoder::new().map_err(|e| e.to_string())?);
+                    let d = openh264::decoder::Decoder::new()
+                        .map_err(|e| DecodeError::Failed(e.to_string()))?;
+                    self.h264 = Some(d);
                 }
                 let d = self.h264.as_mut().expect("made above");
-                match d.decode(data) {
+                match d.decode(&crate::h264::allow_frame_num_gaps(data)) {
                     Ok(Some(yuv)) => {
                         let (w, h) = yuv.dimensions();
+                        if !limits.allows(w as u32, h as u32) {
+                            return Err(DecodeError::Refused { width: w as u32, height: h as u32 });
+                        }
                         let mut rgba = vec![0u8; w * h * 4];
                         yuv.write_rgba8(&mut rgba);
                         Ok(Some(DecodedFrame { rgba, width: w as u32, height: h as u32 }))
                     }
                     Ok(None) => Ok(None),
-                    Err(e) => Err(e.to_string()),
+                    Err(e) => Err(DecodeError::Failed(e.to_string())),
                 }
             }
         }
     }
 }
 
-/// Decodes a JPEG file to RGBA8 with zune-jpeg.
+/// Decodes a JPEG file to RGBA8 with zune-jpeg, within the default limits.
 pub fn decode_jpeg(data: &[u8]) -> Result<DecodedFrame, String> {
+    decode_jpeg_limited(data, &Limits::default()).map_err(|e| e.to_string())
+}
+
+/// Decodes a JPEG file to RGBA8 with zune-jpeg: the size its frame header declares is
+/// checked first, and the decoder is strict (corrupt entropy-coded data is an error, not a
+/// picture of garbage).
+pub fn decode_jpeg_limited(data: &[u8], limits: &Limits) -> Result<DecodedFrame, DecodeError> {
     use zune_jpeg::zune_core::bytestream::ZCursor;
     use zune_jpeg::zune_core::colorspace::ColorSpace;
     use zune_jpeg::zune_core::options::DecoderOptions;
-    let opts = DecoderOptions::default().jpeg_set_out_colorspace(ColorSpace::RGBA);
+    let failed = |e: String| DecodeError::Failed(e);
+    let (width, height) = crate::limits::jpeg_size(data).ok_or(failed("no frame header".into()))?;
+    if !limits.allows(width, height) {
+        return Err(DecodeError::Refused { width, height });
+    }
+    let opts = DecoderOptions::default()
+        .jpeg_set_out_colorspace(ColorSpace::RGBA)
+        .set_strict_mode(true)
+        .set_max_width(limits.max_width as usize)
+        .set_max_height(limits.max_height as usize);
     let mut d = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(data), opts);
-    let rgba = d.decode().map_err(|e| e.to_string())?;
-    let (w, h) = d.dimensions().ok_or("no dimensions")?;
+    let rgba = d.decode().map_err(|e| failed(e.to_string()))?;
+    let (w, h) = d.dimensions().ok_or(failed("no dimensions".into()))?;
     if rgba.len() != w * h * 4 {
-        return Err(format!("decoded {} bytes for {w}x{h}", rgba.len()));
+        return Err(failed(format!("decoded {} bytes for {w}x{h}", rgba.len())));
     }
     Ok(DecodedFrame { rgba, width: w as u32, height: h as u32 })
 }
@@ -112,10 +179,6 @@ pub fn decode_jpeg(data: &[u8]) -> Result<DecodedFrame, String> {
 /// Small: a decoder that falls behind should skip ahead, not build up latency (at 30 fps
 /// four units are 133 ms).
 pub const ENCODED_QUEUE: usize = 4;
-
-/// After a lost H.264 unit, non-key units are skipped until a key unit (IDR or parameter
-/// sets) comes, or this many units have passed (streams with intra refresh have no IDR).
-pub const SKIP_AFTER_LOSS: u32 = 60;
 
 /// Whether an H.264 access unit (Annex B) holds an IDR slice or a sequence parameter set.
 pub fn is_key_unit(annexb: &[u8]) -> bool {
@@ -148,9 +211,14 @@ struct DecodeState {
     last_latency_ms: f64,
     last_frame_us: i64,
     last_unit: Option<i64>,
-    /// Units still to skip while waiting for a key unit after a loss (H.264).
-    skipping: u32,
-    skipped: i64,
+    limits: Limits,
+    /// Units dropped from the queue before the decoder (gaps in unit numbers).
+    dropped_queue: i64,
+    /// Units refused for their declared size.
+    refused: i64,
+    /// Units that gave no picture (parameter sets only, or the decoder waiting for a key
+    /// frame).
+    no_picture: i64,
 }
 
 /// Frames per second over windows of about 250 ms, and when to publish statistics.
@@ -209,8 +277,10 @@ pub fn attach_decoder(
         last_latency_ms: 0.0,
         last_frame_us: 0,
         last_unit: None,
-        skipping: 0,
-        skipped: 0,
+        limits: Limits::of(ds, camera),
+        dropped_queue: 0,
+        refused: 0,
+        no_picture: 0,
     }));
     let spec = MethodSpec::new("unit")
         .param(ParamSpec::new("data", ValueKind::Bytes))
@@ -219,27 +289,17 @@ pub fn attach_decoder(
         .param(ParamSpec::new("arrival_us", ValueKind::Int))
         .describe("Decodes one encoded unit and sends the picture on the camera");
     let ds2 = ds.clone();
-    let assoc_slot: Arc<Mutex<Option<Guid>>> = Arc::default();
-    let slot2 = assoc_slot.clone();
     ds.publish_method_on(executor, object, spec, move |call: Call| {
         if let Some(u) = EncodedUnit::from_values(&call.args) {
-            let assoc = *slot2.lock();
-            on_unit(&ds2, camera, assoc, &state, &u);
+            on_unit(&ds2, camera, &state, &u);
         }
         call.responder.accept(vec![]);
     })?;
     let assoc = ds.join(encoded, object, "unit", Overflow::DropOldest, ENCODED_QUEUE)?;
-    *assoc_slot.lock() = Some(assoc);
     Ok(DecoderHandle { ds: ds.clone(), object, assoc })
 }
 
-fn on_unit(
-    ds: &DataServer,
-    camera: Guid,
-    assoc: Option<Guid>,
-    state: &Mutex<DecodeState>,
-    u: &EncodedUnit,
-) {
+fn on_unit(ds: &DataServer, camera: Guid, state: &Mutex<DecodeState>, u: &EncodedUnit) {
     let mut st = state.lock();
     let Some(codec) = Codec::parse(&u.codec) else {
         st.errors += 1;
@@ -250,26 +310,15 @@ fn on_unit(
         st.decoder = Decoder::new();
         let _ = ds.set(camera, "codec", Value::str(codec.name()));
     }
-    // A gap in unit numbers: units were dropped before the decoder (it fell behind). An
-    // H.264 decoder then waits for a key unit rather than decode from missing references.
-    let gap = st.last_unit.is_some_and(|l| u.unit != l + 1);
-    st.last_unit = Some(u.unit);
-    if codec == Codec::H264 {
-        if gap {
-            st.skipping = SKIP_AFTER_LOSS;
-        }
-        if st.skipping > 0 {
-            if is_key_unit(&u.data) {
-                st.skipping = 0;
-            } else {
-                st.skipping -= 1;
-                st.skipped += 1;
-                return;
-            }
-        }
+    // A gap in unit numbers: units were dropped from the queue before the decoder (it fell
+    // behind). Decoding goes on: the SPS allows frame_num gaps (see `crate::h264`).
+    if let Some(l) = st.last_unit {
+        st.dropped_queue += (u.unit - l - 1).max(0);
     }
+    st.last_unit = Some(u.unit);
+    let limits = st.limits;
     let mut shown = 0;
-    match st.decoder.decode(codec, &u.data) {
+    match st.decoder.decode_limited(codec, &u.data, &limits) {
         Ok(Some(f)) => {
             st.frames += 1;
             shown = 1;
@@ -291,27 +340,29 @@ fn on_unit(
                 let _ = ds.set(camera, "height", Value::Int(h as i64));
             }
         }
-        Ok(None) => {}
-        Err(_) => {
-            st.errors += 1;
-            if codec == Codec::H264 {
-                st.skipping = SKIP_AFTER_LOSS;
-            }
-        }
+        Ok(None) => st.no_picture += 1,
+        // The last good frame stays on screen: nothing is sent.
+        Err(DecodeError::Refused { .. }) => st.refused += 1,
+        Err(DecodeError::Failed(_)) => st.errors += 1,
+    }
+    let network =
+        ds.try_get(camera, "dropped_network".into()).and_then(|v| v.as_i64()).unwrap_or(0);
+    let dropped = network + st.dropped_queue + st.refused + st.no_picture;
+    // Counters on every unit (they add up: see docs/video.md), rates once a period.
+    for (k, v) in [
+        ("frames", Value::Int(st.frames)),
+        ("dropped", Value::Int(dropped)),
+        ("dropped_queue", Value::Int(st.dropped_queue)),
+        ("refused", Value::Int(st.refused)),
+        ("no_picture", Value::Int(st.no_picture)),
+        ("decode_errors", Value::Int(st.errors)),
+    ] {
+        let _ = ds.set(camera, k, v);
     }
     let first = st.frames == 1 && shown == 1;
     if st.meter.tick(shown) || first {
-        let queue_dropped = assoc
-            .and_then(|a| ds.try_get(a, "dropped".into()))
-            .and_then(|v| v.as_i64())
-            .unwrap_or(0);
-        let network =
-            ds.try_get(camera, "dropped_network".into()).and_then(|v| v.as_i64()).unwrap_or(0);
         for (k, v) in [
-            ("frames", Value::Int(st.frames)),
             ("fps", Value::Float((st.meter.fps * 10.0).round() / 10.0)),
-            ("dropped", Value::Int(queue_dropped + network + st.errors + st.skipped)),
-            ("decode_errors", Value::Int(st.errors)),
             ("latency_ms", Value::Float((st.last_latency_ms * 10.0).round() / 10.0)),
             ("last_frame_us", Value::Int(st.last_frame_us)),
         ] {

@@ -36,16 +36,22 @@
 mod clock;
 pub mod codec;
 mod frame;
+pub mod h264;
+pub mod jitter;
+pub mod limits;
 pub mod mjpeg;
 pub mod receiver;
 pub mod rtp;
 pub mod rtp_jpeg;
+pub mod stream;
 pub mod window;
 
 pub use clock::now_us;
-pub use codec::{Codec, CodecModule, DecodedFrame, Decoder, attach_decoder};
+pub use codec::{Codec, CodecModule, DecodeError, DecodedFrame, Decoder, attach_decoder};
 pub use frame::{EncodedUnit, FrameMsg};
-pub use receiver::{DEFAULT_ADDRESS, ReceiverConfig, VideoReceiver};
+pub use limits::{DEFAULT_LIMITS, Limits};
+pub use receiver::{DEFAULT_ADDRESS, MAX_DATAGRAM, ReceiverConfig, VideoReceiver};
+pub use stream::{SourceFilter, Stream, StreamConfig, StreamStats};
 pub use window::{VideoWindows, WindowsConfig};
 
 use mocu_host::{Module, Registry};

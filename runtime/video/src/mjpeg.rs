@@ -13,14 +13,23 @@ pub struct MjpegReassembler {
     in_scan: bool,
     /// Frames thrown away (malformed, or longer than the limit).
     pub dropped: u64,
+    /// Frames emitted.
+    pub emitted: u64,
+    /// Frames thrown away for being longer than the limit (also in `dropped`).
+    pub oversize: u64,
+    /// Longest frame kept (0: the default limit).
+    max_bytes: usize,
 }
-
-/// A frame larger than this is thrown away (and the stream resynchronised at the next SOI).
-pub const MAX_FRAME: usize = 16 << 20;
 
 impl MjpegReassembler {
     pub fn new() -> MjpegReassembler {
         MjpegReassembler::default()
+    }
+
+    /// A reassembler that throws away frames longer than `max_bytes` (and resynchronises
+    /// at the next SOI).
+    pub fn with_limit(max_bytes: usize) -> MjpegReassembler {
+        MjpegReassembler { max_bytes, ..MjpegReassembler::default() }
     }
 
     /// Appends `data`; `emit` gets every JPEG file completed by it.
@@ -45,7 +54,12 @@ impl MjpegReassembler {
             }
             match self.walk() {
                 Walk::More => {
-                    if self.buf.len() > MAX_FRAME {
+                    let max = match self.max_bytes {
+                        0 => crate::DEFAULT_LIMITS.max_unit_bytes,
+                        m => m,
+                    };
+                    if self.buf.len() > max {
+                        self.oversize += 1;
                         self.resync(1);
                     }
                     return;
@@ -54,6 +68,7 @@ impl MjpegReassembler {
                     let rest = self.buf.split_off(end);
                     let frame = std::mem::replace(&mut self.buf, rest);
                     self.in_frame = false;
+                    self.emitted += 1;
                     emit(frame);
                 }
                 Walk::Bad(at) => self.resync(at),

@@ -65,6 +65,10 @@ pub struct DepackStats {
     pub dropped_units: u64,
     /// Packets of kinds this depacketizer does not handle (STAP-B, MTAP, FU-B).
     pub unsupported: u64,
+    /// Units seen (each ended by the marker bit or a new timestamp): emitted or dropped.
+    pub units: u64,
+    /// Units dropped because they grew over the size limit (also in `dropped_units`).
+    pub oversize: u64,
 }
 
 /// One complete unit out of a depacketizer.
@@ -118,12 +122,28 @@ pub struct H264Depacketizer {
     broken: bool,
     in_fu: bool,
     seen_sps: bool,
+    oversize: bool,
+    /// Largest access unit kept (0: the default limit).
+    max_bytes: usize,
     pub stats: DepackStats,
 }
 
 impl H264Depacketizer {
     pub fn new() -> H264Depacketizer {
         H264Depacketizer::default()
+    }
+
+    /// A depacketizer that drops access units larger than `max_bytes`.
+    pub fn with_limit(max_bytes: usize) -> H264Depacketizer {
+        H264Depacketizer { max_bytes, ..H264Depacketizer::default() }
+    }
+
+    /// The sender restarted: the unit in progress is dropped and sequence numbers start
+    /// afresh (the statistics and the parameter sets seen are kept).
+    pub fn restart(&mut self) {
+        self.broken |= !self.au.is_empty();
+        self.flush(&mut |_| {});
+        self.seq = SeqTracker::default();
     }
 
     /// Feeds one packet; `emit` gets each completed access unit.
@@ -156,6 +176,18 @@ impl H264Depacketizer {
         self.seen_sps |= t == 7;
         self.au.extend_from_slice(&START);
         self.au.extend_from_slice(nal);
+        self.bound();
+    }
+
+    /// Drops the unit in progress when it grew over the limit.
+    fn bound(&mut self) {
+        let max =
+            if self.max_bytes == 0 { crate::DEFAULT_LIMITS.max_unit_bytes } else { self.max_bytes };
+        if self.au.len() > max {
+            self.au = Vec::new();
+            self.broken = true;
+            self.oversize = true;
+        }
     }
 
     fn payload(&mut self, pl: &[u8]) {
@@ -196,6 +228,7 @@ impl H264Depacketizer {
                     self.nal(&first);
                 } else if self.in_fu {
                     self.au.extend_from_slice(&pl[2..]);
+                    self.bound();
                 } else {
                     // A middle or end fragment whose start we never saw.
                     self.broken = true;
@@ -211,19 +244,24 @@ impl H264Depacketizer {
         }
     }
 
+    /// Ends the unit in progress: emitted, or counted as dropped (broken, over the limit,
+    /// or before the first SPS). A unit of nothing is no unit.
     fn flush(&mut self, emit: &mut dyn FnMut(Unit)) {
         let au = std::mem::take(&mut self.au);
         let (broken, key) = (self.broken || self.in_fu, self.key);
+        let oversize = std::mem::take(&mut self.oversize);
         self.broken = false;
         self.key = false;
         self.in_fu = false;
         let ts = self.ts.take();
-        if au.is_empty() {
+        if au.is_empty() && !broken {
             return;
         }
-        if broken {
+        self.stats.units += 1;
+        self.stats.oversize += oversize as u64;
+        if broken || au.is_empty() || !self.seen_sps {
             self.stats.dropped_units += 1;
-        } else if self.seen_sps {
+        } else {
             emit(Unit { data: au, timestamp: ts.unwrap_or(0), key });
         }
     }
@@ -347,7 +385,7 @@ mod tests {
         assert_eq!(nals, vec![SPS, PPS, &[0x65, 10, 11, 12, 13][..]]);
         assert_eq!(&idr_a[..3], &nals[2][..3]);
         assert_eq!(annexb_nals(&units[1].data), vec![&[0x41, 9, 9][..]]);
-        assert_eq!(stats, DepackStats::default());
+        assert_eq!(stats, DepackStats { units: 2, ..DepackStats::default() });
     }
 
     #[test]

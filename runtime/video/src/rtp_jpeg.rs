@@ -17,6 +17,9 @@ pub struct JpegDepacketizer {
     broken: bool,
     /// In-band tables by Q (a sender may send them once and then an empty table header).
     tables: HashMap<u8, Vec<u8>>,
+    /// Largest scan kept (0: the default limit).
+    max_bytes: usize,
+    oversize: bool,
     pub stats: DepackStats,
 }
 
@@ -33,6 +36,19 @@ struct FrameHeader {
 impl JpegDepacketizer {
     pub fn new() -> JpegDepacketizer {
         JpegDepacketizer::default()
+    }
+
+    /// A depacketizer that drops frames larger than `max_bytes`.
+    pub fn with_limit(max_bytes: usize) -> JpegDepacketizer {
+        JpegDepacketizer { max_bytes, ..JpegDepacketizer::default() }
+    }
+
+    /// The sender restarted: the frame in progress is dropped and sequence numbers start
+    /// afresh.
+    pub fn restart(&mut self) {
+        self.broken |= self.header.is_some();
+        self.flush(&mut |_| {});
+        self.seq = SeqTracker::default();
     }
 
     pub fn push(&mut self, p: &RtpPacket, emit: &mut dyn FnMut(Unit)) {
@@ -98,6 +114,14 @@ impl JpegDepacketizer {
         if offset != self.scan.len() {
             return None;
         }
+        let max =
+            if self.max_bytes == 0 { crate::DEFAULT_LIMITS.max_unit_bytes } else { self.max_bytes };
+        if self.scan.len() + rest.len() > max {
+            self.scan = Vec::new();
+            self.header = None;
+            self.oversize = true;
+            return None;
+        }
         self.scan.extend_from_slice(rest);
         Some(())
     }
@@ -106,14 +130,18 @@ impl JpegDepacketizer {
         let header = self.header.take();
         let scan = std::mem::take(&mut self.scan);
         let broken = std::mem::replace(&mut self.broken, false);
+        let oversize = std::mem::take(&mut self.oversize);
         let ts = self.ts.take().unwrap_or(0);
+        if header.is_none() && !broken {
+            return;
+        }
+        self.stats.units += 1;
+        self.stats.oversize += oversize as u64;
         match header {
             Some(h) if !broken && !scan.is_empty() => {
                 emit(Unit { data: build_jfif(&h, &scan), timestamp: ts, key: true })
             }
-            Some(_) => self.stats.dropped_units += 1,
-            None if broken => self.stats.dropped_units += 1,
-            None => {}
+            _ => self.stats.dropped_units += 1,
         }
     }
 }
