@@ -5,13 +5,19 @@
 
 use parking_lot::Mutex;
 use std::sync::{Arc, Weak};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime};
 
 /// A source of time for a DataServer. Times are `std::time::Instant`s, so they mix with the
 /// display's and the input engine's times.
 pub trait Clock: Send + Sync + 'static {
     /// The current time.
     fn now(&self) -> Instant;
+
+    /// The time of day (wall time, for what the operator reads: a clock, time stamps). The
+    /// system clock's is the system's; a manual clock's moves with it.
+    fn wall(&self) -> SystemTime {
+        SystemTime::now()
+    }
 
     /// Called once by each DataServer built on this clock. A clock that moves only when
     /// told (a manual clock) keeps `fire` and calls it after every move, and returns true;
@@ -43,6 +49,9 @@ pub struct ManualClock {
 
 struct ManualInner {
     now: Mutex<Instant>,
+    /// The wall time at `start` (then `wall` is `wall0 + (now - start)`).
+    wall0: Mutex<SystemTime>,
+    start: Instant,
     fire: Mutex<Vec<Weak<dyn Fn() + Send + Sync>>>,
 }
 
@@ -61,12 +70,22 @@ impl std::fmt::Debug for ManualClock {
 impl ManualClock {
     /// A manual clock reading the real time of its creation.
     pub fn new() -> ManualClock {
+        let start = Instant::now();
         ManualClock {
             inner: Arc::new(ManualInner {
-                now: Mutex::new(Instant::now()),
+                now: Mutex::new(start),
+                wall0: Mutex::new(SystemTime::now()),
+                start,
                 fire: Mutex::default(),
             }),
         }
+    }
+
+    /// Sets the time of day that [`Clock::wall`] reads now (it moves on with `advance`):
+    /// a test's fixed wall time.
+    pub fn set_wall(&self, wall: SystemTime) {
+        let since = *self.inner.now.lock() - self.inner.start;
+        *self.inner.wall0.lock() = wall.checked_sub(since).unwrap_or(wall);
     }
 
     /// Moves the clock forward by `d` (saturating: a huge `d` moves it as far as an
@@ -90,6 +109,11 @@ impl ManualClock {
 impl Clock for ManualClock {
     fn now(&self) -> Instant {
         *self.inner.now.lock()
+    }
+
+    fn wall(&self) -> SystemTime {
+        let since = *self.inner.now.lock() - self.inner.start;
+        *self.inner.wall0.lock() + since
     }
 
     fn on_advance(&self, fire: Weak<dyn Fn() + Send + Sync>) -> bool {

@@ -92,6 +92,11 @@ impl DataServer {
         self.inner.timer.clock().now()
     }
 
+    /// The time of day on the server's clock ([`Clock::wall`]).
+    pub fn wall_time(&self) -> std::time::SystemTime {
+        self.inner.timer.clock().wall()
+    }
+
     // ----- objects -------------------------------------------------------------------
 
     pub(crate) fn object(&self, guid: Guid) -> Result<Arc<Object>, DsError> {

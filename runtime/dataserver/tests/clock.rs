@@ -122,3 +122,14 @@ fn the_system_clock_is_the_default_and_received_at_follows_it() {
     let at = ds.received_at(o, "x").unwrap().unwrap();
     assert!(at >= before && at <= ds.now());
 }
+
+#[test]
+fn the_wall_time_of_a_manual_clock_is_the_one_set_and_moves_with_advance() {
+    let (ds, clock) = manual();
+    let noon = std::time::UNIX_EPOCH + Duration::from_secs(86_400 * 20_000 + 12 * 3600);
+    clock.advance(ms(500));
+    clock.set_wall(noon);
+    assert_eq!(ds.wall_time(), noon);
+    clock.advance(ms(1_250));
+    assert_eq!(ds.wall_time(), noon + ms(1_250));
+}
