@@ -316,7 +316,6 @@ const LONG_FILES: &[&str] = &[
     "runtime/dataserver/tests/model_equivalence.rs",
     "runtime/widgets/src/renderer.rs",
     "runtime/display/src/wm.rs",
-    "runtime/mavlink/src/link.rs",
 ];
 
 #[test]

@@ -147,6 +147,10 @@ fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
     assert_eq!(ds.get(v, "mode").unwrap(), Value::str("STABILIZE"));
     assert_eq!(ds.get(v, "armed").unwrap(), Value::Bool(false));
 
+    // Commands go only to an address that proved itself with heartbeats in sequence.
+    wait_for(&ds, &[Topic::properties(v)], "the vehicle's address verified", || {
+        (ds.get(v, "verified").ok()? == Value::Bool(true)).then_some(())
+    });
     // Arm: accepted, and the next heartbeat shows it.
     assert_eq!(call(&ds, v, "arm", vec![Value::Bool(true)]), CallOutcome::Accepted(vec![]));
     wait_for(&ds, &[Topic::properties(v)], "armed in the heartbeat", || {

@@ -1,7 +1,11 @@
-//! Splits a UDP datagram into MAVLink 1/2 frames, checks each CRC, and decodes the known
-//! ones. Malformed bytes (bad CRC, truncated frames, bad enum values) and unknown message
-//! ids are counted and skipped; nothing here can fail the caller.
+//! Splits a UDP datagram into MAVLink 1/2 frames, checks each CRC (and, on a link with a
+//! key, each signature), and decodes the known ones. Malformed bytes (bad CRC, truncated
+//! frames, payloads that do not parse), unknown message ids, unknown incompatibility flags
+//! and refused signatures are counted and skipped; nothing here can fail the caller. Enum
+//! values newer than the dialect do not make a message malformed (`lenient.rs`).
 
+use crate::lenient::{self, Msg};
+use crate::signing::{self, Signing};
 use mavlink::dialects::common::MavMessage;
 use mavlink::{MavHeader, MavlinkVersion, Message};
 
@@ -13,15 +17,35 @@ pub struct DecodeCounts {
     pub malformed: u64,
     /// A well-framed message whose id this dialect does not know.
     pub unknown: u64,
+    /// Frames with incompatibility flags we do not know (the protocol says: drop them).
+    pub incompatible: u64,
+    /// Unsigned frames (or MAVLink 1) on a link that requires a signature.
+    pub unsigned: u64,
+    /// Signatures that do not match the link's key.
+    pub bad_signature: u64,
+    /// Signed frames whose timestamp does not move forward (replays).
+    pub old_timestamp: u64,
 }
 
 const V1_STX: u8 = 0xFE;
 const V2_STX: u8 = 0xFD;
-const IFLAG_SIGNED: u8 = 0x01;
+pub(crate) const IFLAG_SIGNED: u8 = 0x01;
+/// The `mavlink` crate's extension for 32-bit system ids.
 const IFLAG_SYSID32: u8 = 0x02;
+const KNOWN_IFLAGS: u8 = IFLAG_SIGNED | IFLAG_SYSID32;
 
-/// Decodes every frame of `buf`, calling `each` with the decoded ones in order.
-pub fn decode_datagram(buf: &[u8], mut each: impl FnMut(MavHeader, MavMessage)) -> DecodeCounts {
+/// Decodes every frame of `buf` without signature checks, calling `each` with the decoded
+/// ones in order.
+pub fn decode_datagram(buf: &[u8], each: impl FnMut(MavHeader, Msg)) -> DecodeCounts {
+    decode_checked(buf, None, each)
+}
+
+/// Decodes every frame of `buf`; with `signing`, only frames signed with its key pass.
+pub fn decode_checked(
+    buf: &[u8],
+    mut signing: Option<&mut Signing>,
+    mut each: impl FnMut(MavHeader, Msg),
+) -> DecodeCounts {
     let mut counts = DecodeCounts::default();
     let mut i = 0;
     let mut skipped_garbage = false;
@@ -44,15 +68,27 @@ pub fn decode_datagram(buf: &[u8], mut each: impl FnMut(MavHeader, MavMessage)) 
                 counts.malformed += 1;
                 break;
             }
-            Frame::Complete { len, version, header, msgid, payload, body, crc } => {
+            Frame::Complete { len, version, iflags, header, msgid, payload, body, crc } => {
                 let extra = MavMessage::extra_crc(msgid);
                 let known = extra != 0 || MavMessage::default_message_from_id(msgid).is_some();
-                if !known {
+                let verdict = |s: &mut Signing| {
+                    let signed = version == MavlinkVersion::V2 && iflags & IFLAG_SIGNED != 0;
+                    s.verify(&buf[i..i + len], signed, header.system_id, header.component_id)
+                };
+                if iflags & !KNOWN_IFLAGS != 0 {
+                    counts.incompatible += 1;
+                } else if !known {
                     counts.unknown += 1;
                 } else if mavlink::calculate_crc(body, extra) != crc {
                     counts.malformed += 1;
+                } else if let Some(Err(r)) = signing.as_deref_mut().map(verdict) {
+                    match r {
+                        signing::Refusal::Unsigned => counts.unsigned += 1,
+                        signing::Refusal::BadSignature => counts.bad_signature += 1,
+                        signing::Refusal::OldTimestamp => counts.old_timestamp += 1,
+                    }
                 } else {
-                    match MavMessage::parse(version, msgid, payload) {
+                    match lenient::parse(version, msgid, payload) {
                         Ok(msg) => {
                             counts.decoded += 1;
                             each(header, msg);
@@ -75,6 +111,7 @@ enum Frame<'a> {
     Complete {
         len: usize,
         version: MavlinkVersion,
+        iflags: u8,
         header: MavHeader,
         msgid: u32,
         payload: &'a [u8],
@@ -107,6 +144,7 @@ fn parse_v2(b: &[u8]) -> Frame<'_> {
     Frame::Complete {
         len: total,
         version: MavlinkVersion::V2,
+        iflags,
         header,
         msgid,
         payload: &b[1 + hlen..1 + hlen + plen],
@@ -130,6 +168,7 @@ fn parse_v1(b: &[u8]) -> Frame<'_> {
     Frame::Complete {
         len: total,
         version: MavlinkVersion::V1,
+        iflags: 0,
         header,
         msgid: b[5] as u32,
         payload: &b[6..6 + plen],
@@ -142,5 +181,12 @@ fn parse_v1(b: &[u8]) -> Frame<'_> {
 pub fn encode_v2(header: MavHeader, msg: &MavMessage) -> Vec<u8> {
     let mut out = Vec::with_capacity(64);
     let _ = mavlink::write_v2_msg(&mut out, header, msg);
+    out
+}
+
+/// Encodes one message as a MAVLink 2 frame signed by `signing` (timestamp: now).
+pub fn encode_v2_signed(header: MavHeader, msg: &MavMessage, signing: &mut Signing) -> Vec<u8> {
+    let mut out = encode_v2(header, msg);
+    signing.sign(&mut out, MavMessage::extra_crc(msg.message_id()), signing::now());
     out
 }

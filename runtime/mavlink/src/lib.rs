@@ -5,19 +5,33 @@
 //! MISSION_ACK becomes the call's outcome (Accepted, Refused with the result's name, Failed,
 //! or TimedOut after retries). Three seconds without a heartbeat mark the link lost and the
 //! data stale until heartbeats return. Malformed and unknown packets are counted, never
-//! fatal.
+//! fatal; enum values newer than the dialect are kept as `unknown(N)`; implausible values
+//! refuse their message with a counter per reason. A link holds at most `max_vehicles`,
+//! forgets the silent ones, answers only addresses that proved to be a vehicle's, and with a
+//! `signing_key` accepts only frames signed with it and signs what it sends
+//! (docs/mavlink.md).
 //!
 //! One blocking reader thread per socket (I/O at the module's edge); everything else runs
 //! on the module's serial executor. No async runtime.
 
 #![forbid(unsafe_code)]
 
+mod commands;
+mod config;
 mod decode;
+mod lenient;
 mod link;
+mod methods;
 mod modes;
+mod signing;
+mod telemetry;
+mod vehicle;
 
-pub use decode::{DecodeCounts, decode_datagram, encode_v2};
-pub use link::{Counters, Link, LinkConfig};
+pub use config::{Counters, LinkConfig, Reason};
+pub use decode::{DecodeCounts, decode_checked, decode_datagram, encode_v2, encode_v2_signed};
+pub use lenient::{GpsRaw, Heartbeat, Lenient, Msg};
+pub use link::Link;
+pub use signing::{Key, Signing};
 
 use mocu_host::{Module, ModuleContext, ModuleSpec, Registry};
 use std::net::UdpSocket;
@@ -49,20 +63,10 @@ impl MavlinkModule {
         }
     }
 
-    /// Settings: `address` (default 0.0.0.0:14550), `command_timeout_ms` (1000), `attempts`
-    /// (3), `link_timeout_ms` (3000).
+    /// Settings: `address` (default 0.0.0.0:14550) and those of [`LinkConfig::from_spec`]
+    /// (docs/mavlink.md).
     pub fn from_spec(spec: &ModuleSpec) -> Result<MavlinkModule, String> {
-        let e = |r: Result<i64, mocu_host::SpecError>| r.map_err(|e| e.to_string());
-        let d = LinkConfig::default();
-        let ms = |v: i64| Duration::from_millis(v.max(1) as u64);
-        let cfg = LinkConfig {
-            command_timeout: ms(e(
-                spec.i64_or("command_timeout_ms", d.command_timeout.as_millis() as i64)
-            )?),
-            attempts: e(spec.i64_or("attempts", d.attempts as i64))?.clamp(1, 100) as u32,
-            link_timeout: ms(e(spec.i64_or("link_timeout_ms", d.link_timeout.as_millis() as i64))?),
-            ..d
-        };
+        let cfg = LinkConfig::from_spec(spec)?;
         let address = spec.str_or("address", DEFAULT_ADDRESS).map_err(|e| e.to_string())?;
         Ok(MavlinkModule::new(&address, cfg))
     }
@@ -86,7 +90,8 @@ impl Module for MavlinkModule {
         let (running, l) = (self.running.clone(), link.clone());
         self.reader = Some(
             ctx.spawn_thread("udp", move || {
-                let mut buf = [0u8; 2048];
+                // The largest UDP payload: a datagram is never cut short.
+                let mut buf = vec![0u8; 65_536];
                 while running.load(Ordering::SeqCst) {
                     match socket.recv_from(&mut buf) {
                         Ok((n, from)) => l.ingest(&buf[..n], Some(from)),

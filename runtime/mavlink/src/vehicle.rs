@@ -1,0 +1,208 @@
+//! One vehicle heard on a link: what we keep of it, how it appears in the world model (its
+//! object, properties and methods), how its address proves itself, and how it is forgotten.
+
+use crate::lenient::{Heartbeat, Lenient};
+use crate::link::Link;
+use crate::modes::{self, Family};
+use mavlink::MavHeader;
+use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavAutopilot, MavCmd, MavMessage, MavType};
+use mocu_dataserver::{DsError, Guid, ObjectInfo, Responder, Value};
+use mocu_host::world::{self, RouteFrame, boolean, float, float_in, int, string};
+use std::net::SocketAddr;
+use std::time::Instant;
+
+pub(crate) struct Pending {
+    pub id: u64,
+    pub command: MavCmd,
+    pub msg: MavMessage,
+    pub attempts: u32,
+    pub responder: Responder,
+    pub label: &'static str,
+}
+
+pub(crate) struct Upload {
+    pub id: u64,
+    pub items: Vec<MISSION_ITEM_INT_DATA>,
+    pub attempts: u32,
+    pub requested: bool,
+    pub responder: Responder,
+}
+
+/// An address being proved: heartbeats seen from it, in sequence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Candidate {
+    pub addr: SocketAddr,
+    pub heartbeats: u32,
+    pub last_seq: u8,
+}
+
+pub(crate) struct Vehicle {
+    pub sysid: u32,
+    pub compid: u8,
+    pub guid: Guid,
+    pub nav: Guid,
+    /// The address we answer: set only once it has proved itself (`prove`).
+    pub addr: Option<SocketAddr>,
+    pub candidate: Option<Candidate>,
+    pub family: Family,
+    pub autopilot: Option<MavAutopilot>,
+    pub last_heartbeat: Instant,
+    pub lost: bool,
+    pub last_seq: Option<u8>,
+    pub rx_w: f64,
+    pub lost_w: f64,
+    /// Home, latched from two agreeing plausible positions (`telemetry.rs`).
+    pub home: Option<(f64, f64)>,
+    pub home_candidate: Option<(f64, f64)>,
+    /// The last GPS fix type heard (raw), if any.
+    pub gps_fix: Option<u8>,
+    pub control: String,
+    pub commands: Vec<Pending>,
+    pub upload: Option<Upload>,
+}
+
+impl Vehicle {
+    /// The autopilot for mode names (an unknown one names modes `custom:N`).
+    pub fn autopilot_or_generic(&self) -> MavAutopilot {
+        self.autopilot.unwrap_or(MavAutopilot::MAV_AUTOPILOT_GENERIC)
+    }
+
+    /// Counts a heartbeat from `from` towards proving that address; a sequence that does
+    /// not move forward (by less than half the sequence space) starts the count again.
+    /// Returns true when the address just became the one we answer.
+    pub fn prove(&mut self, from: SocketAddr, seq: u8, needed: u32) -> bool {
+        let next = match self.candidate {
+            Some(c) if c.addr == from => {
+                let step = seq.wrapping_sub(c.last_seq);
+                let heartbeats = if (1..128).contains(&step) { c.heartbeats + 1 } else { 1 };
+                Candidate { addr: from, heartbeats, last_seq: seq }
+            }
+            _ => Candidate { addr: from, heartbeats: 1, last_seq: seq },
+        };
+        self.candidate = Some(next);
+        if next.heartbeats >= needed && self.addr != Some(from) {
+            self.addr = Some(from);
+            return true;
+        }
+        false
+    }
+}
+
+/// The world-model kind and mode family of a MAV_TYPE: `None` for things that are not
+/// vehicles (ground stations, gimbals…); a type newer than the dialect is a `vehicle`.
+pub(crate) fn classify(t: Lenient<MavType>) -> Option<(&'static str, Family, String)> {
+    match t.known {
+        Some(k) => modes::classify(k).map(|(kind, f)| (kind, f, modes::subtype(k))),
+        None => Some(("vehicle", Family::Copter, t.name("MAV_TYPE_"))),
+    }
+}
+
+impl Link {
+    /// Publishes a newly heard vehicle under `root.vehicles`.
+    pub(crate) fn discover(
+        &self,
+        h: MavHeader,
+        hb: &Heartbeat,
+        kind: &str,
+        family: Family,
+        subtype: &str,
+    ) -> Result<Vehicle, DsError> {
+        let ds = &self.inner.ctx.ds;
+        let ex = &self.inner.ctx.executor;
+        let name = format!("mav{}", h.system_id);
+        let info = ObjectInfo::new(&name, kind).subtype(subtype);
+        let guid = ds.create_object(self.inner.root, info)?;
+        let raw = |r: u8| Value::Int(i64::from(r));
+        world::create_props(
+            ds,
+            guid,
+            vec![
+                ("name", Value::str(&name), string()),
+                ("sysid", Value::Int(i64::from(h.system_id)), int("")),
+                ("autopilot", Value::str(&hb.autopilot.name("MAV_AUTOPILOT_")), string()),
+                ("autopilot_raw", raw(hb.autopilot.raw), int("").describe("MAV_AUTOPILOT")),
+                ("mav_type", Value::str(subtype), string()),
+                ("mav_type_raw", raw(hb.mavtype.raw), int("").describe("MAV_TYPE")),
+                (
+                    "fuel",
+                    Value::Float(0.0),
+                    float_in("fraction", 0.0, 1.0).describe("battery remaining, 0..1"),
+                ),
+                ("battery_v", Value::Float(0.0), float("V")),
+                ("armed", Value::Bool(false), boolean()),
+                ("engine", Value::Bool(false), boolean()),
+                (
+                    "link",
+                    Value::Float(1.0),
+                    float_in("fraction", 0.0, 1.0).describe("link quality"),
+                ),
+                ("link_lost", Value::Bool(false), boolean()),
+                ("stale", Value::Bool(false), boolean()),
+                (
+                    "verified",
+                    Value::Bool(false),
+                    boolean()
+                        .describe("its address proved itself: commands and heartbeats go to it"),
+                ),
+                ("mode", Value::str(""), string()),
+                ("system_status", Value::str(""), string()),
+                ("system_status_raw", raw(hb.system_status.raw), int("").describe("MAV_STATE")),
+                ("control", Value::str(""), string()),
+                ("drop_rate", Value::Float(0.0), float_in("fraction", 0.0, 1.0)),
+            ],
+        )?;
+        let nav = ds.create_object(guid, ObjectInfo::new("nav", "nav"))?;
+        world::create_props(
+            ds,
+            nav,
+            vec![
+                ("speed", Value::Float(0.0), float("m/s")),
+                ("heading", Value::Float(0.0), float_in("deg", 0.0, 360.0)),
+                ("x", Value::Float(0.0), float("m")),
+                ("y", Value::Float(0.0), float("m")),
+                ("lat", Value::Float(0.0), float_in("deg", -90.0, 90.0)),
+                ("lon", Value::Float(0.0), float_in("deg", -180.0, 180.0)),
+                ("alt", Value::Float(0.0), float("m").describe("above home")),
+                ("alt_msl", Value::Float(0.0), float("m")),
+                ("roll", Value::Float(0.0), float("deg")),
+                ("pitch", Value::Float(0.0), float("deg")),
+                ("yaw", Value::Float(0.0), float("deg")),
+                ("climb", Value::Float(0.0), float("m/s")),
+                ("airspeed", Value::Float(0.0), float("m/s")),
+                ("groundspeed", Value::Float(0.0), float("m/s")),
+                ("throttle", Value::Float(0.0), float("%")),
+                ("gps_fix", Value::str(""), string()),
+                ("gps_fix_raw", Value::Int(0), int("").describe("GPS_FIX_TYPE")),
+                ("satellites", Value::Int(0), int("")),
+                ("hdop", Value::Float(0.0), float("")),
+            ],
+        )?;
+        ds.create_object(guid, ObjectInfo::new("cameras", "cameras"))?;
+        world::publish_routes(ds, ex, guid, RouteFrame::Global)?;
+        self.publish_methods(guid)?;
+        self.inner
+            .ctx
+            .report(mocu_host::Level::Info, format!("discovered {name} ({kind}, {subtype})"));
+        Ok(Vehicle {
+            sysid: h.system_id,
+            compid: h.component_id,
+            guid,
+            nav,
+            addr: None,
+            candidate: None,
+            family,
+            autopilot: hb.autopilot.known,
+            last_heartbeat: ds.now(),
+            lost: false,
+            last_seq: None,
+            rx_w: 0.0,
+            lost_w: 0.0,
+            home: None,
+            home_candidate: None,
+            gps_fix: None,
+            control: String::new(),
+            commands: Vec::new(),
+            upload: None,
+        })
+    }
+}
