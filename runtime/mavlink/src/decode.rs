@@ -184,9 +184,15 @@ pub fn encode_v2(header: MavHeader, msg: &MavMessage) -> Vec<u8> {
     out
 }
 
-/// Encodes one message as a MAVLink 2 frame signed by `signing` (timestamp: now).
-pub fn encode_v2_signed(header: MavHeader, msg: &MavMessage, signing: &mut Signing) -> Vec<u8> {
+/// Encodes one message as a MAVLink 2 frame signed by `signing` at `timestamp` (10 µs units
+/// since 2015-01-01; see [`signing::timestamp`]).
+pub fn encode_v2_signed(
+    header: MavHeader,
+    msg: &MavMessage,
+    signing: &mut Signing,
+    timestamp: u64,
+) -> Vec<u8> {
     let mut out = encode_v2(header, msg);
-    signing.sign(&mut out, MavMessage::extra_crc(msg.message_id()), signing::now());
+    signing.sign(&mut out, MavMessage::extra_crc(msg.message_id()), timestamp);
     out
 }

@@ -194,7 +194,10 @@ impl Link {
             sequence: self.inner.seq.fetch_add(1, Ordering::Relaxed),
         };
         let bytes = match self.inner.signing.lock().as_mut() {
-            Some(s) => encode_v2_signed(header, msg, s),
+            Some(s) => {
+                let now = crate::signing::timestamp(self.inner.ctx.ds.wall_time());
+                encode_v2_signed(header, msg, s, now)
+            }
             None => encode_v2(header, msg),
         };
         if sock.send_to(&bytes, addr).is_ok() {

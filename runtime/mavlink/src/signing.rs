@@ -141,11 +141,10 @@ impl Signing {
     }
 }
 
-/// The signing clock: 10 µs units since 2015-01-01 00:00 UTC (1420070400 s after the Unix
-/// epoch). Read at the module's edge, when a frame is signed.
-pub fn now() -> u64 {
-    let unix =
-        std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+/// A signing timestamp: 10 µs units since 2015-01-01 00:00 UTC (1420070400 s after the
+/// Unix epoch). The link reads the time of day from the DataServer's clock.
+pub fn timestamp(wall: std::time::SystemTime) -> u64 {
+    let unix = wall.duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
     (unix.as_micros() as u64 / 10).saturating_sub(1_420_070_400 * 100_000)
 }
 
