@@ -380,41 +380,6 @@ impl GpuCompositor {
         Ok(())
     }
 
-    /// Replaces the frame's pixels in `damage` with `frame`'s (the display's size,
-    /// premultiplied RGBA8): a frame composited on the CPU, shown through the surface.
-    pub(crate) fn upload_frame(&mut self, frame: &Pixmap, damage: IRect) {
-        let (w, h) = (frame.width(), frame.height());
-        let r = damage.intersect(&IRect::new(0, 0, w as i32, h as i32));
-        self.uploaded = 0;
-        if r.is_empty() || (w, h) != self.size {
-            return;
-        }
-        let stride = w as usize * 4;
-        let start = r.y as usize * stride + r.x as usize * 4;
-        let end = (r.bottom() as usize - 1) * stride + r.right() as usize * 4;
-        self.queue.write_texture(
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.frame,
-                mip_level: 0,
-                origin: wgpu::Origin3d { x: r.x as u32, y: r.y as u32, z: 0 },
-                aspect: wgpu::TextureAspect::All,
-            },
-            &frame.data()[start..end],
-            wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(stride as u32),
-                rows_per_image: Some(r.h as u32),
-            },
-            wgpu::Extent3d { width: r.w as u32, height: r.h as u32, depth_or_array_layers: 1 },
-        );
-        self.uploaded = end - start;
-    }
-
-    /// The adapter, as `name via backend`.
-    pub(crate) fn adapter_name(&self) -> &str {
-        &self.adapter
-    }
-
     fn frame_bind(&self) -> wgpu::BindGroup {
         let dummy = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("blit"),

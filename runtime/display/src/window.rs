@@ -1,9 +1,10 @@
-//! A real OS window (winit) showing a display through the wgpu compositor: what
-//! `mocu run` uses where there is a display server.
+//! A real OS window (winit) showing a display: composited by wgpu on a hardware GPU
+//! adapter, else by tiny-skia and shown by softbuffer (`present.rs`). What `mocu run` uses
+//! where there is a display server.
 
 use crate::display::{Compositor, Counters, Display, DisplayError, DisplayOptions, PointerEvent};
 use crate::gpu::GpuCompositor;
-use crate::present::{CpuPresenter, WindowPath, choose_path};
+use crate::present::{SoftPresenter, WindowPath, choose_path};
 use mocu_dataserver::DataServer;
 use mocu_dataserver::Value;
 use parking_lot::Mutex;
@@ -92,6 +93,44 @@ struct App<'a> {
     next: Instant,
     result: Result<Counters, DisplayError>,
     cursor: (f32, f32),
+    shown: Shown,
+}
+
+/// Frames actually shown in the window, for the line printed at the end.
+#[derive(Default)]
+struct Shown {
+    frames: u64,
+    first: Option<Instant>,
+    last: Option<Instant>,
+    drawing: Duration,
+    showing: Duration,
+}
+
+impl Shown {
+    fn add(&mut self, drawing: Duration, showing: Duration) {
+        let now = Instant::now();
+        self.frames += 1;
+        self.first.get_or_insert(now);
+        self.last = Some(now);
+        self.drawing += drawing;
+        self.showing += showing;
+    }
+
+    /// `300 frames shown in 5.0 s (60.0 a second), each 3.1 ms drawing + 0.4 ms showing`.
+    fn summary(&self) -> String {
+        let n = self.frames.max(1) as f64;
+        let span = match (self.first, self.last) {
+            (Some(a), Some(b)) => (b - a).as_secs_f64(),
+            _ => 0.0,
+        };
+        let rate = if span > 0.0 { (self.frames - 1) as f64 / span } else { 0.0 };
+        format!(
+            "{} frames shown in {span:.1} s ({rate:.1} a second), each {:.1} ms drawing + {:.1} ms showing",
+            self.frames,
+            self.drawing.as_secs_f64() * 1e3 / n,
+            self.showing.as_secs_f64() * 1e3 / n
+        )
+    }
 }
 
 impl App<'_> {
@@ -103,55 +142,8 @@ impl App<'_> {
             .with_resizable(true);
         let window =
             Arc::new(el.create_window(attrs).map_err(|e| DisplayError::Window(e.to_string()))?);
-        let instance = wgpu::Instance::new(
-            wgpu::InstanceDescriptor::new_with_display_handle(Box::new(el.owned_display_handle()))
-                .with_env(),
-        );
-        let surface = instance
-            .create_surface(window.clone())
-            .map_err(|e| DisplayError::Window(e.to_string()))?;
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            apply_limit_buckets: false,
-            compatible_surface: Some(&surface),
-        }))
-        .map_err(|e| DisplayError::NoAdapter(e.to_string()))?;
-        let size = window.inner_size();
-        let info = adapter.get_info();
-        let path = choose_path(&info, std::env::var("MOCU_COMPOSITOR").ok().as_deref());
-        let gpu = GpuCompositor::for_window(
-            &adapter,
-            surface,
-            d.width,
-            d.height,
-            size.width,
-            size.height,
-            d.background,
-        )?;
-        let comp: Box<dyn Compositor> = match path {
-            WindowPath::Gpu => Box::new(gpu),
-            WindowPath::Cpu => {
-                let cpu = crate::compose::CpuCompositor::new(d.width, d.height, d.background)
-                    .ok_or(DisplayError::BadSize(d.width, d.height))?;
-                Box::new(CpuPresenter::new(cpu, gpu))
-            }
-        };
-        let why = match path {
-            WindowPath::Cpu => {
-                "layers composited on the CPU: a software adapter, or MOCU_COMPOSITOR=cpu"
-            }
-            WindowPath::Gpu => "layers composited on the GPU",
-        };
-        log::info!(
-            "window {}x{} on {} ({:?} adapter `{}`: {why})",
-            d.width,
-            d.height,
-            comp.name(),
-            info.device_type,
-            info.name
-        );
-        eprintln!("mocu-display: window {}x{} on {} ({why})", d.width, d.height, comp.name());
+        let choice = std::env::var("MOCU_COMPOSITOR").ok();
+        let comp = open_compositor(el, &window, d, choice.as_deref())?;
         let mut display = Display::with_compositor(&self.ds, d.clone(), comp)?;
         if let Some(setup) = self.setup.take() {
             setup(&mut display);
@@ -201,14 +193,22 @@ impl App<'_> {
             return;
         }
         self.result = Ok(display.counters());
+        if self.shown.frames > 0 {
+            eprintln!("mocu-display: {}", self.shown.summary());
+        }
         el.exit();
     }
 
     fn draw(&mut self, el: &ActiveEventLoop) {
         let Some(display) = &mut self.display else { return };
+        let t = Instant::now();
         let st = display.frame();
         if st.drawn {
-            display.present();
+            let drawn = t.elapsed();
+            let t = Instant::now();
+            if display.present() {
+                self.shown.add(drawn, t.elapsed());
+            }
         }
         self.ticks += 1;
         if let Some(n) = self.opts.frames
@@ -317,6 +317,72 @@ impl ApplicationHandler<Wake> for App<'_> {
     }
 }
 
+/// The compositor for a window: wgpu on a hardware adapter; tiny-skia shown by
+/// softbuffer where wgpu finds none or only a software rasteriser (no GL then), or where
+/// `MOCU_COMPOSITOR=cpu` (`choice`) asks for it, when wgpu is not even started. Says which
+/// on stderr.
+fn open_compositor(
+    el: &ActiveEventLoop,
+    window: &Arc<Window>,
+    d: &DisplayOptions,
+    choice: Option<&str>,
+) -> Result<Box<dyn Compositor>, DisplayError> {
+    let size = window.inner_size();
+    let wants_cpu = choice.is_some_and(|c| c.eq_ignore_ascii_case("cpu"));
+    let mut found: Option<(wgpu::Adapter, wgpu::Surface<'static>)> = None;
+    let mut info = None;
+    if !wants_cpu {
+        let instance = wgpu::Instance::new(
+            wgpu::InstanceDescriptor::new_with_display_handle(Box::new(el.owned_display_handle()))
+                .with_env(),
+        );
+        let surface = instance
+            .create_surface(window.clone())
+            .map_err(|e| DisplayError::Window(e.to_string()))?;
+        match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            apply_limit_buckets: false,
+            compatible_surface: Some(&surface),
+        })) {
+            Ok(adapter) => {
+                info = Some(adapter.get_info());
+                found = Some((adapter, surface));
+            }
+            Err(e) => log::info!("no GPU adapter for the window: {e}"),
+        }
+    }
+    let path = choose_path(info.as_ref(), choice);
+    let why = path.reason(info.as_ref(), choice);
+    if path == WindowPath::Cpu {
+        // The wgpu surface and adapter are gone before softbuffer takes the window.
+        drop(found.take());
+    }
+    let comp: Box<dyn Compositor> = match (path, found) {
+        (WindowPath::Gpu, Some((adapter, surface))) => Box::new(GpuCompositor::for_window(
+            &adapter,
+            surface,
+            d.width,
+            d.height,
+            size.width,
+            size.height,
+            d.background,
+        )?),
+        _ => {
+            let cpu = crate::compose::CpuCompositor::new(d.width, d.height, d.background)
+                .ok_or(DisplayError::BadSize(d.width, d.height))?;
+            Box::new(SoftPresenter::new(cpu, window.clone())?)
+        }
+    };
+    let what = match path {
+        WindowPath::Gpu => "layers composited on the GPU",
+        WindowPath::Cpu => "layers composited on the CPU, no GPU in the way",
+    };
+    log::info!("window {}x{} on {} ({what}: {why})", d.width, d.height, comp.name());
+    eprintln!("mocu-display: window {}x{} on {} ({what}: {why})", d.width, d.height, comp.name());
+    Ok(comp)
+}
+
 /// Hands a key, mouse button or wheel to the input module through
 /// `root.operator.inputs.<device>.<method>(name, value)`; nothing happens without one.
 fn forward_input(ds: &DataServer, device: &str, method: &str, name: String, value: Value) {
@@ -370,8 +436,9 @@ fn key_name(k: &Key) -> Option<String> {
 /// Opens an OS window and runs the display in it until closed (or for `frames` ticks).
 /// `setup` runs once the display exists (publish windows, claim them...).
 ///
-/// Errors: `Window` when there is no display server (no `DISPLAY`), `NoAdapter` when wgpu
-/// finds no adapter for the window. `mocu run` then falls back to the headless CPU path.
+/// Errors: `Window` when there is no display server (no `DISPLAY`) or neither wgpu nor
+/// softbuffer can show in the window; without a GPU adapter the window still opens (CPU
+/// path). `mocu run` falls back to the headless CPU path on an error.
 pub fn run_window<'a>(
     ds: &DataServer,
     opts: WindowOptions,
@@ -395,6 +462,7 @@ pub fn run_window<'a>(
         next: Instant::now(),
         result: Err(DisplayError::Window("the event loop ended before the window opened".into())),
         cursor: (0.0, 0.0),
+        shown: Shown::default(),
     };
     let ran = el.run_app(&mut app).map_err(|e| DisplayError::Window(e.to_string()));
     // The waker thread sleeps until a change: this one finds the loop gone, and it ends.
