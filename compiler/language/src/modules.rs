@@ -163,7 +163,7 @@ pub const MODULES: &[ModuleKind] = &[
             s("ssrc", Int, "any", "The only RTP stream heard, by its SSRC"),
             s("silence_ms", Int, "2000", "Silence after which the next stream may be heard"),
             s("reorder", Int, "8", "RTP packets held to put them back in order, 1 to 1024"),
-            s("reorder_ms", Int, "50", "Longest wait for a missing RTP packet, in ms"),
+            s("reorder_ms", Int, "100", "Longest wait for a missing RTP packet, in ms"),
             s("max_width", Int, "4096", "Widest frame decoded (px); wider ones are refused"),
             s("max_height", Int, "4096", "Tallest frame decoded (px); taller ones are refused"),
             s("max_unit_kb", Int, "32768", "Largest encoded frame kept, in KiB"),

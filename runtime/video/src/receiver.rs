@@ -82,7 +82,7 @@ impl ReceiverConfig {
             ssrc,
             silence: Duration::from_millis(ranged("silence_ms", 2000, 10, 600_000)? as u64),
             reorder: ranged("reorder", 8, 1, 1024)? as usize,
-            reorder_delay: Duration::from_millis(ranged("reorder_ms", 50, 0, 5000)? as u64),
+            reorder_delay: Duration::from_millis(ranged("reorder_ms", 100, 0, 5000)? as u64),
             limits: Limits {
                 max_width: ranged("max_width", d.max_width as i64, 16, 16384)? as u32,
                 max_height: ranged("max_height", d.max_height as i64, 16, 16384)? as u32,

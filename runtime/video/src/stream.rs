@@ -79,7 +79,7 @@ impl Default for StreamConfig {
             ssrc: None,
             silence: SILENCE,
             reorder: 8,
-            reorder_delay: Duration::from_millis(50),
+            reorder_delay: Duration::from_millis(100),
             limits: Limits::default(),
         }
     }

@@ -3,6 +3,8 @@
 //! and stopped when its guard drops.
 #![allow(dead_code)]
 
+pub mod relay;
+
 use std::process::{Child, Command, Stdio};
 
 /// What a missing peer says: the test fails (it does not skip) and names the package.
@@ -26,11 +28,26 @@ pub enum Kind {
 /// An ffmpeg sender; killed (SIGTERM through `timeout`) when dropped.
 pub struct Ffmpeg {
     child: Child,
+    ended: bool,
 }
 
 impl Ffmpeg {
     /// Streams testsrc at `w`×`h`, 30 fps, for at most `secs` seconds to 127.0.0.1:`port`.
     pub fn stream(kind: Kind, w: u32, h: u32, port: u16, secs: u32) -> Ffmpeg {
+        Ffmpeg::stream_with(kind, w, h, port, secs, &[], "")
+    }
+
+    /// As [`Ffmpeg::stream`], with more output options (`-ssrc 7 -seq 100`, …) and URL
+    /// options (`localport=5000`).
+    pub fn stream_with(
+        kind: Kind,
+        w: u32,
+        h: u32,
+        port: u16,
+        secs: u32,
+        extra: &[&str],
+        query: &str,
+    ) -> Ffmpeg {
         require_ffmpeg();
         let src = format!("testsrc=size={w}x{h}:rate=30");
         let mut args: Vec<String> = vec![
@@ -74,9 +91,11 @@ impl Ffmpeg {
             }
         };
         args.extend(codec.iter().map(|s| s.to_string()));
+        args.extend(extra.iter().map(|s| s.to_string()));
         args.push(match kind {
             Kind::RawMjpeg => format!("udp://127.0.0.1:{port}?pkt_size=1316"),
-            _ => format!("rtp://127.0.0.1:{port}"),
+            _ if query.is_empty() => format!("rtp://127.0.0.1:{port}"),
+            _ => format!("rtp://127.0.0.1:{port}?{query}"),
         });
         let child = Command::new("timeout")
             .args(&args)
@@ -84,12 +103,24 @@ impl Ffmpeg {
             .stdout(Stdio::null())
             .spawn()
             .expect("cannot start `timeout ffmpeg …` (coreutils, ffmpeg)");
-        Ffmpeg { child }
+        Ffmpeg { child, ended: false }
+    }
+}
+
+impl Ffmpeg {
+    /// Waits for ffmpeg to end (bounded: `timeout` ends it `secs` + 2 s after its start,
+    /// and kills it 2 s later).
+    pub fn wait(mut self) {
+        let _ = self.child.wait();
+        self.ended = true;
     }
 }
 
 impl Drop for Ffmpeg {
     fn drop(&mut self) {
+        if self.ended {
+            return;
+        }
         // `timeout` passes the TERM on to ffmpeg and, with `-k 2`, kills it 2 s later if it
         // is still running: waiting for the exit is bounded.
         let _ = Command::new("kill").args(["-TERM", &self.child.id().to_string()]).status();
