@@ -1,0 +1,113 @@
+//! Screen placement (see [`crate::placement`]): `anchor` names (E0213), the `design` size
+//! (E0214: in the layout file, once, positive px) and, in a layout with a design, positions
+//! computed from the screen's own size (W0005), which would be scaled twice.
+
+use crate::ast::{self, ExprKind, Item, LitUnit};
+use crate::codes;
+use crate::diagnostics::Diagnostics;
+use crate::passes::Modules;
+use crate::placement::{ANCHORS, Anchor, Design};
+use crate::program::{Bound, PathBase, Program};
+
+/// Checks every anchor and design of the layout and the files it uses; returns the design.
+pub fn check_anchors(modules: &Modules, diags: &mut Diagnostics) -> Option<Design> {
+    let mut design = None;
+    let mut first: Option<crate::source::Span> = None;
+    for (m, module) in modules.iter().enumerate() {
+        for item in &module.ast.items {
+            if let Item::Design(d) = item {
+                if m != 0 {
+                    diags
+                        .error(codes::BAD_DESIGN, d.span, "`design` belongs in the layout file")
+                        .label("in a used file")
+                        .help("a used file's positions take the design of the layout that uses it");
+                    continue;
+                }
+                if let Some(f) = first {
+                    diags
+                        .error(codes::BAD_DESIGN, d.span, "the layout declares `design` twice")
+                        .related(f, "first declared here")
+                        .help("one `design W x H` per layout");
+                    continue;
+                }
+                first = Some(d.span);
+                if let (Some(w), Some(h)) = (size(&d.width, diags), size(&d.height, diags)) {
+                    design = Some(Design { width: w, height: h });
+                }
+            }
+            anchors(item, diags);
+        }
+    }
+    design
+}
+
+/// A design dimension: a positive number of px.
+fn size(e: &ast::Expr, diags: &mut Diagnostics) -> Option<f64> {
+    let ExprKind::Number { value, unit } = &e.kind else { return None };
+    match unit {
+        None | Some(LitUnit::Px) if *value > 0.0 => Some(*value),
+        None | Some(LitUnit::Px) => {
+            diags
+                .error(codes::BAD_DESIGN, e.span, "a design size is more than 0 px")
+                .help("write the screen size the layout was drawn for: `design 1280 x 720`");
+            None
+        }
+        Some(_) => {
+            diags
+                .error(codes::BAD_DESIGN, e.span, "a design size is in px")
+                .help("write the screen size the layout was drawn for: `design 1280 x 720`");
+            None
+        }
+    }
+}
+
+fn anchors(item: &Item, diags: &mut Diagnostics) {
+    match item {
+        Item::Window(w) => anchor(w.anchor.as_ref(), diags),
+        Item::In(b) => b.widgets.iter().for_each(|w| anchor(w.anchor.as_ref(), diags)),
+        Item::Each(e) => e.items.iter().for_each(|i| anchors(i, diags)),
+        _ => {}
+    }
+}
+
+fn anchor(name: Option<&ast::Ident>, diags: &mut Diagnostics) {
+    let Some(n) = name else { return };
+    if Anchor::parse(&n.name).is_some() {
+        return;
+    }
+    let d = diags.error(codes::UNKNOWN_ANCHOR, n.span, format!("unknown anchor `{}`", n.name));
+    d.help(format!("an anchor is one of {}", ANCHORS.join(", ")));
+    d.suggest(&n.name, ANCHORS.iter().copied());
+}
+
+/// W0005: with a design, positions are in design px; the screen's size in px would be
+/// scaled once more. Anchors and `%` say the same without it.
+pub fn warn_screen_px(program: &Program, diags: &mut Diagnostics) {
+    if program.design.is_none() {
+        return;
+    }
+    let windows = program.windows.iter().chain(program.templates.iter().flat_map(|t| &t.windows));
+    let widgets = program.widgets.iter().chain(program.templates.iter().flat_map(|t| &t.widgets));
+    let bounds = windows.flat_map(|w| w.rect.iter()).chain(widgets.flat_map(|w| w.at.iter()));
+    for b in bounds {
+        if reads_screen_size(b) {
+            diags
+                .warning(
+                    codes::SCREEN_PX_IN_DESIGN,
+                    b.expr.span,
+                    "with `design`, positions are design px, but this reads the screen's size",
+                )
+                .label("screen px, scaled again")
+                .help("measure from an edge with `anchor` (`anchor bottom-right`), or use %");
+        }
+    }
+}
+
+fn reads_screen_size(b: &Bound) -> bool {
+    b.paths.iter().any(|p| {
+        p.base == PathBase::Root
+            && p.segments.len() == 2
+            && p.segments[0] == "display"
+            && (p.segments[1] == "width" || p.segments[1] == "height")
+    })
+}
