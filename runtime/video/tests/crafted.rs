@@ -254,3 +254,14 @@ fn a_24_byte_squatter_does_not_keep_a_real_stream_out() {
     assert_eq!(prop(&r, "ignored"), squats, "every squatter datagram, and only those");
     r.module.stop();
 }
+
+#[test]
+fn an_h264_stream_over_the_configured_size_is_refused_before_decoding() {
+    let mut r = receiver(&[("max_width", 320), ("max_height", 240)]);
+    let _ff = Ffmpeg::stream(Kind::RtpH264, 640, 480, r.port, 10);
+    wait_until(&r, &["refused"], || prop(&r, "refused") >= 10, || {});
+    assert!(prop(&r, "refused") >= 10, "every unit of a 640×480 stream");
+    assert_eq!((prop(&r, "frames"), prop(&r, "decode_errors")), (0, 0));
+    assert_eq!(r.frames.try_iter().count(), 0);
+    r.module.stop();
+}
