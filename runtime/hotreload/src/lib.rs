@@ -8,8 +8,10 @@
 //!   the operator's display (`root.operator.diagnostics`), which goes when the file is fixed.
 //! - [`watch`](Reloader::watch) follows every file the target depends on with `notify`,
 //!   watching their folders so editors that save by rename (vim, VS Code) or delete and
-//!   recreate are seen, and coalesces an editor's burst of events into one reload. Checking
-//!   and compiling run on the watcher's thread, never the frame thread.
+//!   recreate are seen, and coalesces an editor's burst of events into one reload, per file
+//!   the layout depends on (other files' events never delay it: `debounce.rs`). Checking
+//!   and compiling run off the frame thread; a check is bounded in time and source size
+//!   (`ReloadLimits`) and refused like a broken layout past them.
 //! - `root.operator.reload()` asks for a reload through the DataServer (a remote tool).
 //!
 //! Architecture invariant: the world model's vehicles, goals and routes are never touched
@@ -18,7 +20,10 @@
 #![forbid(unsafe_code)]
 
 mod banner;
+mod debounce;
+mod limits;
 mod reloader;
 mod watcher;
 
+pub use limits::ReloadLimits;
 pub use reloader::{Outcome, Reloader, ReloaderOptions, choose};

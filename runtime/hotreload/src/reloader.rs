@@ -1,11 +1,13 @@
 use crate::banner;
+use crate::limits::{ReloadLimits, check_bounded};
 use mocu_dataserver::{CallOutcome, DataServer, MethodSpec, ObjectInfo};
-use mocu_language::{Diagnostics, FsLoader, Severity, SourceMap};
+use mocu_language::{FsLoader, Severity};
 use mocu_layout::{EventSink, Layout, LayoutConfig, ReloadStats};
 use mocu_value::{Guid, Value};
 use parking_lot::Mutex;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What a reload did.
 #[derive(Clone, Debug, PartialEq)]
@@ -42,6 +44,8 @@ pub(crate) struct Inner {
     pub(crate) options: ReloaderOptions,
     pub(crate) sink: Arc<dyn EventSink>,
     pub(crate) state: Mutex<State>,
+    /// Set when the reloader goes: a check that ends after it swaps nothing in.
+    pub(crate) stopping: AtomicBool,
 }
 
 pub(crate) struct State {
@@ -50,6 +54,7 @@ pub(crate) struct State {
     pub(crate) files: Vec<PathBuf>,
     pub(crate) watcher: Option<crate::watcher::Watcher>,
     reloads: u64,
+    limits: ReloadLimits,
 }
 
 /// The layout to run from a bundle: by name, else the first.
@@ -94,7 +99,14 @@ impl Reloader {
             target: target.to_path_buf(),
             options,
             sink,
-            state: Mutex::new(State { layout: Some(layout), files, watcher: None, reloads: 0 }),
+            state: Mutex::new(State {
+                layout: Some(layout),
+                files,
+                watcher: None,
+                reloads: 0,
+                limits: ReloadLimits::default(),
+            }),
+            stopping: AtomicBool::new(false),
         });
         banner::start(ds, inner.options.config.screen);
         publish_reload_method(&inner);
@@ -123,6 +135,11 @@ impl Reloader {
         crate::watcher::start(&self.inner)
     }
 
+    /// Bounds each reload's check (default: [`ReloadLimits::default`]).
+    pub fn set_limits(&self, limits: ReloadLimits) {
+        self.inner.state.lock().limits = limits;
+    }
+
     /// Reloads done so far (successful or not).
     pub fn reloads(&self) -> u64 {
         self.inner.state.lock().reloads
@@ -131,6 +148,7 @@ impl Reloader {
 
 impl Drop for Reloader {
     fn drop(&mut self) {
+        self.inner.stopping.store(true, Ordering::SeqCst);
         let (layout, watcher) = {
             let mut st = self.inner.state.lock();
             (st.layout.take(), st.watcher.take())
@@ -236,16 +254,11 @@ impl Inner {
     }
 
     fn check_and_swap(self: &Arc<Self>) -> Outcome {
-        let text = match std::fs::read_to_string(&self.target) {
-            Ok(t) => t,
-            Err(e) => {
-                return Outcome::Failed(format!("cannot read {}: {e}", self.target.display()));
-            }
+        let limits = self.state.lock().limits;
+        let (sources, mut diags, bundle) = match check_bounded(&self.target, limits) {
+            Ok(checked) => checked,
+            Err(why) => return Outcome::Failed(why),
         };
-        let path = self.target.to_string_lossy().replace('\\', "/");
-        let mut sources = SourceMap::new();
-        let mut diags = Diagnostics::new();
-        let bundle = mocu_language::check_path(&path, text, &FsLoader, &mut sources, &mut diags);
         diags.sort();
         let errors = diags.count(Severity::Error);
         let list = diags.into_vec();
@@ -281,6 +294,9 @@ impl Inner {
         let files = dependencies(&self.target, &bundle, index);
         // The banner goes as the good layout comes, never after it is on screen (a failed
         // swap shows it again).
+        if self.stopping.load(Ordering::SeqCst) {
+            return Outcome::Failed("stopped".into());
+        }
         banner::clear(&self.ds);
         let mut st = self.state.lock();
         let Some(layout) = st.layout.as_ref() else { return Outcome::Failed("stopped".into()) };

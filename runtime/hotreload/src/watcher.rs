@@ -2,15 +2,17 @@
 //! saves by writing a new file and renaming it over the old one (vim, VS Code), or that
 //! deletes and recreates it, replaces the inode a file watch would follow. Events are
 //! filtered by the files the target depends on, and a burst of them (write, rename, chmod)
-//! is coalesced: the reload runs once the files have been quiet for a short while.
+//! is coalesced per file: the reload runs once those files have been quiet for a short while,
+//! whatever other files of their folders do (`debounce.rs`).
 
+use crate::debounce::Debounce;
 use crate::reloader::Inner;
 use crossbeam_channel::{Receiver, RecvTimeoutError};
 use notify::{RecursiveMode, Watcher as _};
 use std::collections::BTreeSet;
 use std::path::PathBuf;
 use std::sync::{Arc, Weak};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// How long the files must be quiet before reloading.
 const QUIET: Duration = Duration::from_millis(30);
@@ -64,33 +66,31 @@ fn sync_dirs(inner: &Inner, w: &mut Watcher) -> Result<(), String> {
     Ok(())
 }
 
-fn touches_target(inner: &Inner, ev: &notify::Event) -> bool {
-    if matches!(ev.kind, notify::EventKind::Access(_)) {
-        return false;
-    }
-    let files: Vec<PathBuf> = inner.state.lock().files.iter().map(|f| canonical(f)).collect();
-    ev.paths.iter().any(|p| files.contains(&canonical(p)))
-}
-
 fn run(weak: Weak<Inner>, rx: Receiver<notify::Result<notify::Event>>) {
+    let mut debounce = Debounce::new(QUIET);
     loop {
-        // Wait for the first relevant event…
-        let ev = match rx.recv() {
-            Ok(ev) => ev,
-            Err(_) => return, // the watcher was dropped: the reloader is gone
+        let got = match debounce.deadline() {
+            None => rx.recv().map_err(|_| RecvTimeoutError::Disconnected),
+            Some(due) => rx.recv_deadline(due),
         };
-        let Some(inner) = weak.upgrade() else { return };
-        if !ev.is_ok_and(|e| touches_target(&inner, &e)) {
+        match got {
+            Ok(Ok(ev)) if !matches!(ev.kind, notify::EventKind::Access(_)) => {
+                let Some(inner) = weak.upgrade() else { return };
+                let files: Vec<PathBuf> =
+                    inner.state.lock().files.iter().map(|f| canonical(f)).collect();
+                let now = Instant::now();
+                for p in ev.paths.iter().map(|p| canonical(p)) {
+                    debounce.event(&p, files.contains(&p), now);
+                }
+            }
+            Ok(_) | Err(RecvTimeoutError::Timeout) => {}
+            // The watcher was dropped: the reloader is gone.
+            Err(RecvTimeoutError::Disconnected) => return,
+        }
+        if !debounce.take_due(Instant::now()) {
             continue;
         }
-        // …then until the burst is over.
-        loop {
-            match rx.recv_timeout(QUIET) {
-                Ok(_) => continue,
-                Err(RecvTimeoutError::Timeout) => break,
-                Err(RecvTimeoutError::Disconnected) => return,
-            }
-        }
+        let Some(inner) = weak.upgrade() else { return };
         inner.reload();
         // A reload may add or drop files (a new `use`): follow them.
         let mut st = inner.state.lock();

@@ -343,3 +343,42 @@ fn a_schema_edit_is_hot_reloaded_even_from_a_multi_line_array_of_the_project() {
     let shown = r.ds.get(d, "text").unwrap().to_string();
     assert!(shown.contains("fuel"), "{shown}");
 }
+
+/// `n` more boxes in `hud`: a layout that takes the checker a while.
+fn many_boxes(n: usize) -> String {
+    (0..n).map(|i| format!("  x{i}: Box {{ at {} 10 4 4  c #00ff00 }}\n", i % 300)).collect()
+}
+
+#[test]
+fn a_save_over_the_reload_limits_is_refused_like_a_broken_layout_and_the_last_good_one_stays() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    assert_eq!(r.frame(), (255, 0, 0));
+    let good = std::fs::metadata(&r.path).unwrap().len();
+    r.reloader.set_limits(ReloadLimits { max_source_bytes: good + 64, ..ReloadLimits::default() });
+
+    // Too large to be read into the checker.
+    std::fs::write(&r.path, layout_text("#00ff00", 100, &many_boxes(50))).unwrap();
+    match r.reloader.reload_now() {
+        Outcome::Failed(why) => assert!(why.contains("bytes, over the"), "{why}"),
+        other => panic!("an oversized layout: {other:?}"),
+    }
+    assert!(r.banner_active());
+    assert_eq!(r.frame(), (255, 0, 0), "the last good layout stays");
+
+    // A check that cannot end within its time: none may take any time at all here, and this
+    // one has thousands of widgets to check.
+    std::fs::write(&r.path, layout_text("#0000ff", 100, &many_boxes(3_000))).unwrap();
+    r.reloader.set_limits(ReloadLimits { check_time: Duration::ZERO, ..ReloadLimits::default() });
+    match r.reloader.reload_now() {
+        Outcome::Failed(why) => assert!(why.contains("checking took longer than"), "{why}"),
+        other => panic!("a check past its time: {other:?}"),
+    }
+    assert_eq!(r.frame(), (255, 0, 0), "the last good layout stays");
+
+    // Within the limits again, a layout loads.
+    std::fs::write(&r.path, layout_text("#00ff00", 100, &many_boxes(50))).unwrap();
+    r.reloader.set_limits(ReloadLimits::default());
+    assert!(matches!(r.reloader.reload_now(), Outcome::Reloaded(_)));
+    assert_eq!(r.frame(), (0, 255, 0));
+    assert!(!r.banner_active());
+}
