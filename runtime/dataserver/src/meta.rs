@@ -16,6 +16,10 @@ pub struct PropMeta {
     pub description: Option<Arc<str>>,
     /// Inclusive numeric limits; writes outside are refused.
     pub range: Option<(f64, f64)>,
+    /// How often the publisher writes it, changed or not (Hz). A display takes a value
+    /// that has received no write for three periods as stale, unless the schema gives the
+    /// property a `stale_after` (docs/display.md, "Stale data").
+    pub rate_hz: Option<f64>,
 }
 
 impl PropMeta {
@@ -35,6 +39,12 @@ impl PropMeta {
 
     pub fn describe(mut self, text: &str) -> PropMeta {
         self.description = Some(text.into());
+        self
+    }
+
+    /// The publisher writes the value `hz` times a second (see [`PropMeta::rate_hz`]).
+    pub fn rate(mut self, hz: f64) -> PropMeta {
+        self.rate_hz = (hz.is_finite() && hz > 0.0).then_some(hz);
         self
     }
 

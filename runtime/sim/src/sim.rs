@@ -4,8 +4,8 @@ use crate::camera;
 use crate::rng::Rng;
 use crate::vehicle::{Camera, Guidance, Vehicle, VehicleKind};
 use mocu_dataserver::{
-    Call, CallOutcome, DataServer, DsError, Guid, MethodSpec, ObjectInfo, ParamSpec, Value,
-    ValueKind,
+    Call, CallOutcome, DataServer, DsError, Guid, MethodSpec, ObjectInfo, ParamSpec, PropMeta,
+    Value, ValueKind,
 };
 use mocu_host::world::{self, RouteFrame, boolean, float, float_in, int, string};
 use mocu_host::{Module, ModuleContext, ModuleSpec, Registry};
@@ -337,31 +337,34 @@ impl Sim {
             ("mode", Value::str("manual"), string()),
             ("control", Value::str(""), string().describe("operator holding control")),
         ]);
-        world::create_props(ds, guid, props)?;
+        world::create_props(ds, guid, with_rate(props, w.cfg.rate_hz))?;
         world::create_props(
             ds,
             nav,
-            vec![
-                ("speed", Value::Float(0.0), float("m/s")),
-                ("heading", Value::Float(heading), float_in("deg", 0.0, 360.0)),
-                ("x", Value::Float(x), float("m")),
-                ("y", Value::Float(y), float("m")),
-                ("lat", Value::Float(0.0), float_in("deg", -90.0, 90.0)),
-                ("lon", Value::Float(0.0), float_in("deg", -180.0, 180.0)),
-                ("alt", Value::Float(0.0), float("m")),
-                ("roll", Value::Float(0.0), float("deg")),
-                ("pitch", Value::Float(0.0), float("deg")),
-                (
-                    "goal_throttle",
-                    Value::Float(0.0),
-                    float_in("%", -100.0, 100.0).describe("operator goal"),
-                ),
-                (
-                    "goal_rudder",
-                    Value::Float(0.0),
-                    float_in("deg", -30.0, 30.0).describe("operator goal"),
-                ),
-            ],
+            with_rate(
+                vec![
+                    ("speed", Value::Float(0.0), float("m/s")),
+                    ("heading", Value::Float(heading), float_in("deg", 0.0, 360.0)),
+                    ("x", Value::Float(x), float("m")),
+                    ("y", Value::Float(y), float("m")),
+                    ("lat", Value::Float(0.0), float_in("deg", -90.0, 90.0)),
+                    ("lon", Value::Float(0.0), float_in("deg", -180.0, 180.0)),
+                    ("alt", Value::Float(0.0), float("m")),
+                    ("roll", Value::Float(0.0), float("deg")),
+                    ("pitch", Value::Float(0.0), float("deg")),
+                    (
+                        "goal_throttle",
+                        Value::Float(0.0),
+                        float_in("%", -100.0, 100.0).describe("operator goal"),
+                    ),
+                    (
+                        "goal_rudder",
+                        Value::Float(0.0),
+                        float_in("deg", -30.0, 30.0).describe("operator goal"),
+                    ),
+                ],
+                w.cfg.rate_hz,
+            ),
         )?;
         publish(ds, &v, w.cfg.origin);
         let origin = w.cfg.origin;
@@ -565,6 +568,39 @@ impl Sim {
             call.responder.reply(outcome);
         })
     }
+}
+
+/// Properties [`publish`] writes every step, changed or not: their metadata says so
+/// (`PropMeta::rate_hz`), so that a display takes them as stale after three missed steps.
+const TELEMETRY: &[&str] = &[
+    "fuel",
+    "battery_v",
+    "armed",
+    "engine",
+    "link",
+    "mode",
+    "control",
+    "speed",
+    "heading",
+    "x",
+    "y",
+    "lat",
+    "lon",
+    "alt",
+    "roll",
+    "pitch",
+];
+
+fn with_rate(
+    mut props: Vec<(&str, Value, PropMeta)>,
+    rate_hz: f64,
+) -> Vec<(&str, Value, PropMeta)> {
+    for (name, _, meta) in &mut props {
+        if TELEMETRY.contains(name) {
+            *meta = std::mem::take(meta).rate(rate_hz);
+        }
+    }
+    props
 }
 
 fn to_global(origin: (f64, f64), x: f64, y: f64) -> (f64, f64) {

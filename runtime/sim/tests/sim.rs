@@ -284,3 +284,18 @@ fn the_vehicles_setting_refuses_untyped_names_duplicates_and_counts_beside_it() 
         assert!(e.contains(why), "{e}");
     }
 }
+
+/// What the simulator writes every step declares its rate (`PropMeta::rate_hz`), so that
+/// a display ages it after three missed steps; what the operator sets does not.
+#[test]
+fn telemetry_declares_the_step_rate_and_operator_goals_do_not() {
+    let (ds, sim) = sim(SimConfig { rate_hz: 10.0, ..quiet() });
+    run(&sim, 0.1);
+    let usv = v(&ds, "usv1");
+    let nav = ds.resolve(&["vehicles", "usv1", "nav"]).unwrap();
+    for (g, p) in [(usv, "fuel"), (usv, "link"), (usv, "mode"), (nav, "speed"), (nav, "heading")] {
+        assert_eq!(ds.meta(g, p).unwrap().rate_hz, Some(10.0), "{p}");
+    }
+    assert_eq!(ds.meta(nav, "goal_throttle").unwrap().rate_hz, None);
+    assert_eq!(ds.meta(usv, "name").unwrap().rate_hz, None);
+}
