@@ -1,16 +1,25 @@
 //! How `mocu run` ends. SIGINT (Ctrl-C) and SIGTERM ask the frame loop (headless or
 //! windowed) to stop; the run then writes `--screenshot`, `--dump` and `--log` before it
-//! stops the modules. A second signal ends the process at once, and so does a teardown
-//! that has not finished within [`GRACE`] (its outputs are already written).
+//! stops the modules. The shutdown a signal starts is bounded: if the process is still there
+//! [`SIGNAL_BOUND`] after the first signal (outputs stuck, a module that will not stop, a machine
+//! under load), it exits with 128 + the signal. A second signal ends the process at once,
+//! from the signal handler itself (no thread, lock or busy worker can hold it up), and so
+//! does a teardown that has not finished within [`GRACE`] (its outputs are already written).
 
 use crossbeam_channel::{Receiver, Sender, bounded, never};
 use mocu_display::WindowStop;
 use signal_hook::consts::{SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 /// How long the modules get to stop after the outputs are written.
 pub const GRACE: Duration = Duration::from_secs(10);
+
+/// How long the whole shutdown a signal starts may take (the outputs, then the modules'
+/// [`GRACE`]).
+pub const SIGNAL_BOUND: Duration = Duration::from_secs(20);
 
 /// A stop asked for by a signal.
 pub struct Stop {
@@ -35,20 +44,27 @@ pub fn on_signals() -> Stop {
 }
 
 fn listen(tx: Sender<()>, window: WindowStop) -> std::io::Result<()> {
+    // In the handler, in this order: exit if a signal came before, then remember this one.
+    let armed = Arc::new(AtomicBool::new(false));
+    for sig in [SIGINT, SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())?;
+        signal_hook::flag::register(sig, armed.clone())?;
+    }
     let mut signals = Signals::new([SIGINT, SIGTERM])?;
     std::thread::Builder::new().name("mocu-signals".into()).spawn(move || {
-        let mut seen = 0;
-        for sig in signals.forever() {
+        if let Some(sig) = signals.forever().next() {
             let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
-            seen += 1;
-            if seen == 1 {
-                eprintln!("mocu: {name}: stopping (send it again to exit at once)");
-                let _ = tx.try_send(());
-                window.stop();
-            } else {
-                eprintln!("mocu: {name} again: exiting now");
-                std::process::exit(128 + sig);
-            }
+            eprintln!("mocu: {name}: stopping (send it again to exit at once)");
+            let _ = tx.try_send(());
+            window.stop();
+            // The shutdown is bounded from here, whatever it waits for.
+            let (_never, wait) = bounded::<()>(0);
+            let _ = wait.recv_timeout(SIGNAL_BOUND);
+            eprintln!(
+                "mocu: still stopping {} s after {name} (outputs or a module stuck); exiting",
+                SIGNAL_BOUND.as_secs()
+            );
+            signal_hook::low_level::exit(128 + sig);
         }
     })?;
     Ok(())

@@ -135,3 +135,68 @@ fn dump_root_display_shows_the_layouts_windows_as_they_were_at_exit() {
     }
     assert!(windows.iter().any(|w| w == "strip@usv1"), "the first USV's strip: {windows:?}");
 }
+
+/// A run whose shutdown gets stuck on its outputs: `--screenshot` is a FIFO that nobody
+/// reads, so writing it blocks for good (as a machine under heavy decoding or a stuck module
+/// would hold a shutdown up, but deterministically).
+fn stuck_run() -> (Child, crossbeam_channel::Receiver<String>, Vec<String>, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("shot.png");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success(), "mkfifo");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_mocu"))
+        .args(["run", "layouts/fig3-multi-usv.mocu", "--headless", "--size", "640x360"])
+        .args(["--mavlink", "off", "--video", "off", "--no-watch", "--screenshot"])
+        .arg(&fifo)
+        .env_remove("DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let err = lines(&mut child);
+    let seen = wait_running(&err);
+    (child, err, seen, dir)
+}
+
+fn signal(child: &Child, name: &str) {
+    let status =
+        Command::new("kill").args([&format!("-{name}"), &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+}
+
+/// Waits for the line that says the signal was taken.
+fn wait_stopping(err: &crossbeam_channel::Receiver<String>, seen: &mut Vec<String>) {
+    loop {
+        match err.recv_timeout(HANG) {
+            Ok(l) => {
+                let stopping = l.contains(": stopping");
+                seen.push(l);
+                if stopping {
+                    return;
+                }
+            }
+            Err(_) => panic!("the signal was not taken:\n{}", seen.join("\n")),
+        }
+    }
+}
+
+#[test]
+fn a_second_sigint_exits_at_once_while_the_first_ones_shutdown_is_stuck() {
+    use std::os::unix::process::ExitStatusExt;
+    let (child, err, mut seen, _dir) = stuck_run();
+    signal(&child, "INT");
+    wait_stopping(&err, &mut seen);
+    signal(&child, "INT");
+    let (status, _, stderr) = finish(child, &err, seen);
+    assert_eq!(status.code(), Some(130), "{status:?} {:?}\n{stderr}", status.signal());
+    assert!(!stderr.contains("still stopping"), "the second signal, not the bound: {stderr}");
+}
+
+#[test]
+fn the_shutdown_a_signal_starts_is_bounded_even_when_it_is_stuck() {
+    let (child, err, mut seen, _dir) = stuck_run();
+    signal(&child, "TERM");
+    wait_stopping(&err, &mut seen);
+    let (status, _, stderr) = finish(child, &err, seen);
+    assert_eq!(status.code(), Some(143), "{status:?}\n{stderr}");
+    assert!(stderr.contains("still stopping 20 s after SIGTERM"), "{stderr}");
+}
