@@ -4,6 +4,7 @@
 use crate::color::Color;
 use crate::geom::IRect;
 use crate::pixel::{blend_row, premultiply};
+use crate::tiles::Tiles;
 use mocu_dataserver::Guid;
 use tiny_skia::Pixmap;
 
@@ -12,6 +13,10 @@ pub struct LayerView<'a> {
     /// The window the layer belongs to (a stable id for GPU textures).
     pub window: Guid,
     pub pixmap: &'a Pixmap,
+    /// The pixmap's drawn-on tiles, where known: the rest is transparent.
+    pub tiles: Option<&'a Tiles>,
+    /// Every pixel of the pixmap is opaque.
+    pub opaque: bool,
     /// Where the pixmap's pixel (0, 0) lands on the screen.
     pub x: i32,
     pub y: i32,
@@ -69,23 +74,56 @@ impl CpuCompositor {
             .filter_map(|l| {
                 let op = (l.opacity.clamp(0.0, 1.0) * 255.0).round() as u8;
                 let r = l.screen_rect().intersect(&damage);
-                (op > 0 && !r.is_empty()).then_some((r, l, op))
+                let blank = l.tiles.is_some_and(|t| !t.touches(r.offset(-l.x, -l.y)));
+                (op > 0 && !r.is_empty() && !blank).then_some((r, l, op))
             })
             .collect();
         // Row by row, every layer: the frame's row stays in the cache while the layers
-        // are blended into it, so the frame is written to memory once.
+        // are blended into it, so the frame is written to memory once. An opaque layer
+        // across the whole row hides the background and the layers below: the row starts
+        // as a copy of it.
         for y in damage.y..damage.bottom() {
             let row = &mut dst_px[y as usize * fw..][..fw];
-            row[damage.x as usize..damage.right() as usize].fill(self.background);
-            for (r, l, op) in &parts {
-                if y < r.y || y >= r.bottom() {
-                    continue;
+            let in_row = |(r, _, _): &&(IRect, &LayerView<'_>, u8)| y >= r.y && y < r.bottom();
+            let base = parts.iter().rposition(|(r, l, op)| {
+                *op == 255
+                    && l.opaque
+                    && r.x == damage.x
+                    && r.w == damage.w
+                    && in_row(&&(*r, *l, *op))
+            });
+            let above = match base {
+                Some(i) => {
+                    let (r, l, _) = &parts[i];
+                    let lw = l.pixmap.width() as usize;
+                    let (src_px, _) = l.pixmap.data().as_chunks::<4>();
+                    let (sy, sx) = ((y - l.y) as usize, (r.x - l.x) as usize);
+                    row[r.x as usize..r.right() as usize]
+                        .copy_from_slice(&src_px[sy * lw + sx..][..r.w as usize]);
+                    &parts[i + 1..]
                 }
+                None => {
+                    row[damage.x as usize..damage.right() as usize].fill(self.background);
+                    &parts[..]
+                }
+            };
+            for part in above.iter().filter(in_row) {
+                let (r, l, op) = part;
                 let lw = l.pixmap.width() as usize;
                 let (src_px, _) = l.pixmap.data().as_chunks::<4>();
-                let (sy, sx) = ((y - l.y) as usize, (r.x - l.x) as usize);
-                let src = &src_px[sy * lw + sx..][..r.w as usize];
-                blend_row(&mut row[r.x as usize..r.right() as usize], src, *op);
+                let sy = (y - l.y) as usize;
+                let src_row = &src_px[sy * lw..][..lw];
+                let mut blend = |x0: i32, x1: i32| {
+                    let (a, b) = ((x0 - l.x) as usize, (x1 - l.x) as usize);
+                    blend_row(&mut row[x0 as usize..x1 as usize], &src_row[a..b], *op);
+                };
+                match l.tiles {
+                    // Only the drawn-on tiles: the rest of the layer is transparent.
+                    Some(t) => t.row_runs(y - l.y, r.x - l.x, r.right() - l.x, |a, b| {
+                        blend(a + l.x, b + l.x)
+                    }),
+                    None => blend(r.x, r.right()),
+                }
             }
         }
     }

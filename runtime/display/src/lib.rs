@@ -29,6 +29,7 @@ pub mod pixel;
 mod present;
 mod skia;
 mod text;
+mod tiles;
 #[cfg(feature = "gpu")]
 mod window;
 mod wm;
@@ -56,6 +57,7 @@ pub use path::{Path, PathBuilder, PathEl};
 pub use present::{WindowPath, choose_path};
 pub use skia::SkiaCanvas;
 pub use text::{FAMILY, measure as measure_text};
+pub use tiles::Tiles;
 #[cfg(feature = "gpu")]
 pub use window::{WindowOptions, WindowStop, run_window};
 pub use wm::{FrameStats, Hit, PAINT_ERROR, WINDOW_TYPE, WinProps, WindowManager};

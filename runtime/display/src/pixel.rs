@@ -131,15 +131,12 @@ pub fn cover_row(dst: &mut [[u8; 4]], src: [u8; 4], mask: &[u8]) {
     let mut d8 = dst.chunks_exact_mut(8);
     let mut m8 = mask.chunks_exact(8);
     for (d, m) in (&mut d8).zip(&mut m8) {
-        let (mut any, mut all) = (0u8, 255u8);
-        for k in m {
-            any |= k;
-            all &= k;
-        }
-        if any == 0 {
+        // The eight coverages as one word: none, or all full.
+        let m8 = u64::from_le_bytes(m.try_into().expect("chunks of 8"));
+        if m8 == 0 {
             continue;
         }
-        if all == 255 && src[3] == 255 {
+        if m8 == u64::MAX && src[3] == 255 {
             d.fill(src);
             continue;
         }
@@ -169,30 +166,48 @@ pub fn blend_row(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
     let mut d8 = dst.chunks_exact_mut(8);
     let mut s8 = src.chunks_exact(8);
     for (d, s) in (&mut d8).zip(&mut s8) {
-        let (mut any, mut all) = (0u8, 255u8);
+        // Whole pixels or'ed and and'ed (vector lanes), then their alpha bytes.
+        let (mut any, mut all) = (0u32, u32::MAX);
         for p in s {
-            any |= p[3];
-            all &= p[3];
+            let v = u32::from_le_bytes(*p);
+            any |= v;
+            all &= v;
         }
-        if any == 0 {
+        if any >> 24 == 0 {
             continue;
         }
-        if all == 255 && opacity == 255 {
+        if all >> 24 == 255 && opacity == 255 {
             d.copy_from_slice(s);
             continue;
         }
-        let (d, s) = (d.as_flattened_mut(), s.as_flattened());
-        let mut c = [0u16; 32];
-        for i in 0..32 {
-            c[i] = mul255(s[i] as u16, o);
-        }
-        for i in 0..32 {
-            d[i] = (c[i] + mul255(d[i] as u16, 255 - c[i | 3])) as u8;
+        for (d, s) in d.iter_mut().zip(s) {
+            *d = over_pair(u32::from_le_bytes(*s), u32::from_le_bytes(*d), o as u32).to_le_bytes();
         }
     }
     for (d, s) in d8.into_remainder().iter_mut().zip(s8.remainder()) {
         over_coverage(d, *s, opacity);
     }
+}
+
+const PAIRS: u32 = 0x00FF_00FF;
+
+/// Two 8-bit values in the 16-bit halves of `x` (as `PAIRS` masks them) times `m`
+/// (0..=255), each divided by 255 with rounding: [`mul255`] on both at once.
+#[inline(always)]
+fn mul255_pair(x: u32, m: u32) -> u32 {
+    let t = x * m + 0x0080_0080;
+    ((t + ((t >> 8) & PAIRS)) >> 8) & PAIRS
+}
+
+/// `src * k` over `dst` (premultiplied RGBA8 as little-endian words): red and blue, then
+/// green and alpha, two channels a multiply.
+#[inline(always)]
+fn over_pair(src: u32, dst: u32, k: u32) -> u32 {
+    let (c_rb, c_ga) = (mul255_pair(src & PAIRS, k), mul255_pair((src >> 8) & PAIRS, k));
+    let inv = 255 - (c_ga >> 16);
+    let d_rb = mul255_pair(dst & PAIRS, inv);
+    let d_ga = mul255_pair((dst >> 8) & PAIRS, inv);
+    ((c_rb + d_rb) & PAIRS) | (((c_ga + d_ga) & PAIRS) << 8)
 }
 
 #[cfg(test)]

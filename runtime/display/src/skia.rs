@@ -9,8 +9,10 @@ use crate::image::Image;
 use crate::path::Path;
 use crate::pixel;
 use crate::text;
+use crate::tiles::Tiles;
 
 mod analytic;
+mod masks;
 use tiny_skia::{FillRule, Mask, Paint, Pixmap};
 
 #[derive(Clone, Copy, Debug)]
@@ -36,14 +38,46 @@ pub struct SkiaCanvas {
     mask: Option<(IRect, Mask)>,
     /// The pixmap still holds a previous frame, to be cleared before anything draws on it
     /// unless the first drawing covers every pixel with opaque paint (a chart's or a
-    /// camera's background): one memset of the layer saved.
+    /// camera's background): one memset of the layer saved. Only the drawn-on tiles are
+    /// cleared.
     stale: bool,
+    /// The tiles drawn on (before a stale pixmap is cleared: in its previous frame).
+    tiles: Tiles,
+    /// Every pixel is opaque: an opaque drawing covered the whole pixmap (source-over
+    /// keeps it so).
+    opaque: bool,
 }
 
 impl SkiaCanvas {
     /// A canvas over `pixmap`, whose pixel (0, 0) is window-local `origin`; `size` is the
     /// window's size. The damage is the pixmap's extent.
     pub fn new(pixmap: Pixmap, origin: (i32, i32), size: Size) -> SkiaCanvas {
+        let tiles = Tiles::all(pixmap.width(), pixmap.height());
+        SkiaCanvas::with_tiles(pixmap, tiles, origin, size)
+    }
+
+    /// A canvas over a transparent pixmap (nothing drawn on it yet).
+    pub(crate) fn blank(pixmap: Pixmap, origin: (i32, i32), size: Size) -> SkiaCanvas {
+        let tiles = Tiles::none(pixmap.width(), pixmap.height());
+        SkiaCanvas::with_tiles(pixmap, tiles, origin, size)
+    }
+
+    /// As [`SkiaCanvas::reusing`], where only `tiles` of the pixmap were drawn on.
+    pub(crate) fn reusing_drawn(
+        pixmap: Pixmap,
+        tiles: Tiles,
+        origin: (i32, i32),
+        size: Size,
+    ) -> SkiaCanvas {
+        let tiles = if tiles.size() == (pixmap.width(), pixmap.height()) {
+            tiles
+        } else {
+            Tiles::all(pixmap.width(), pixmap.height())
+        };
+        SkiaCanvas { stale: true, ..SkiaCanvas::with_tiles(pixmap, tiles, origin, size) }
+    }
+
+    fn with_tiles(pixmap: Pixmap, tiles: Tiles, origin: (i32, i32), size: Size) -> SkiaCanvas {
         let full = IRect::new(0, 0, pixmap.width() as i32, pixmap.height() as i32);
         let damage = full.offset(origin.0, origin.1).to_rect().intersect(&Rect::from_size(size));
         SkiaCanvas {
@@ -55,6 +89,8 @@ impl SkiaCanvas {
             stack: Vec::new(),
             mask: None,
             stale: false,
+            tiles,
+            opaque: false,
         }
     }
 
@@ -66,9 +102,14 @@ impl SkiaCanvas {
     }
 
     /// Gives the pixmap back.
-    pub fn into_pixmap(mut self) -> Pixmap {
+    pub fn into_pixmap(self) -> Pixmap {
+        self.into_parts().0
+    }
+
+    /// Gives the pixmap back with its drawn-on tiles and whether it is wholly opaque.
+    pub(crate) fn into_parts(mut self) -> (Pixmap, Tiles, bool) {
         self.ready();
-        self.pixmap
+        (self.pixmap, self.tiles, self.opaque)
     }
 
     pub fn pixmap(&mut self) -> &Pixmap {
@@ -78,9 +119,40 @@ impl SkiaCanvas {
 
     /// Clears a reused pixmap before the first drawing that needs it cleared.
     fn ready(&mut self) {
-        if std::mem::take(&mut self.stale) {
-            self.pixmap.data_mut().fill(0);
+        if !std::mem::take(&mut self.stale) {
+            return;
         }
+        self.opaque = false;
+        if self.tiles.is_all() {
+            self.pixmap.data_mut().fill(0);
+        } else {
+            let w = self.pixmap.width() as usize;
+            let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+            for r in self.tiles.rects() {
+                for y in r.y..r.bottom() {
+                    px[y as usize * w + r.x as usize..][..r.w as usize].fill([0; 4]);
+                }
+            }
+        }
+        self.tiles.reset();
+    }
+
+    /// Records that pixels inside `r` (pixmap pixels) are drawn on.
+    #[inline]
+    fn touch(&mut self, r: IRect) {
+        self.tiles.mark(r.intersect(&self.state.clip));
+    }
+
+    /// The pixmap pixels a drawing inside user-space `user`, grown by `pad` user units,
+    /// may touch (all of the clip when the box is not finite).
+    fn device_box(&self, user: Rect, pad: f32) -> IRect {
+        let d = self.device().map_rect(user.inset(-pad)).inset(-2.0);
+        if !(d.x.is_finite() && d.y.is_finite() && d.w.is_finite() && d.h.is_finite()) {
+            return self.state.clip;
+        }
+        let big = 1.0e9;
+        let d = Rect::new(d.x.max(-big), d.y.max(-big), d.w.min(2.0 * big), d.h.min(2.0 * big));
+        IRect::covering(d).intersect(&self.state.clip)
     }
 
     /// User coordinates to pixmap pixels.
@@ -96,12 +168,13 @@ impl SkiaCanvas {
 
     /// Runs a drawing operation with the clip mask (`None` when the clip is the whole
     /// pixmap); does nothing when the clip is empty.
-    fn draw_with(&mut self, f: impl FnOnce(&mut Pixmap, Option<&Mask>)) {
+    fn draw_with(&mut self, bounds: IRect, f: impl FnOnce(&mut Pixmap, Option<&Mask>)) {
         let clip = self.state.clip;
         if clip.is_empty() {
             return;
         }
         self.ready();
+        self.touch(bounds);
         if clip == self.full() {
             return f(&mut self.pixmap, None);
         }
@@ -166,8 +239,11 @@ impl SkiaCanvas {
         let opaque = lut.iter().all(|c| c[3] == 255);
         if opaque && area == self.full() {
             self.stale = false; // every pixel is overwritten
+            self.opaque = true;
+            self.tiles.mark_all();
         } else {
             self.ready();
+            self.touch(area);
         }
         let w = self.pixmap.width() as usize;
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
@@ -228,6 +304,7 @@ impl SkiaCanvas {
             if r.is_empty() || m.data.len() < m.width * m.height {
                 return;
             }
+            self.tiles.mark(r);
             let (cx, w) = ((r.x - mx0) as usize, r.w as usize);
             for y in r.y..r.bottom() {
                 let mrow = &m.data[(y - my0) as usize * m.width + cx..][..w];
@@ -236,6 +313,7 @@ impl SkiaCanvas {
             }
             return;
         }
+        let tiles = &mut self.tiles;
         text::with_engine(|e| {
             for g in &run.glyphs {
                 let Some(img) = e.glyph(g.key) else { continue };
@@ -250,6 +328,7 @@ impl SkiaCanvas {
                 if r.is_empty() {
                     continue;
                 }
+                tiles.mark(r);
                 let cx = (r.x - gx) as usize;
                 for y in r.y..r.bottom() {
                     let my = (y - gy) as usize;
@@ -405,9 +484,12 @@ impl Canvas for SkiaCanvas {
         }
         if clip == self.full() {
             self.stale = false; // every pixel is overwritten
+            self.opaque = color.a == 255;
         } else {
             self.ready();
+            self.opaque &= color.a == 255;
         }
+        self.touch(clip);
         let px = pixel::premultiply(color);
         let w = self.pixmap.width() as usize;
         let (data, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
@@ -429,7 +511,8 @@ impl Canvas for SkiaCanvas {
         }
         let Some(paint) = skia_paint(brush) else { return };
         let t = self.device().to_skia();
-        self.draw_with(|pm, mask| pm.fill_path(&p, &paint, FillRule::Winding, t, mask));
+        let b = self.device_box(path_bounds(&p), 0.0);
+        self.draw_with(b, |pm, mask| pm.fill_path(&p, &paint, FillRule::Winding, t, mask));
     }
 
     fn stroke_path(&mut self, path: &Path, stroke: &Stroke, brush: &Brush) {
@@ -445,7 +528,9 @@ impl Canvas for SkiaCanvas {
         let Some(paint) = skia_paint(brush) else { return };
         let t = self.device().to_skia();
         let s = skia_stroke(stroke);
-        self.draw_with(|pm, mask| pm.stroke_path(&p, &paint, &s, t, mask));
+        // Miter joins reach miter_limit * width / 2 from the path.
+        let b = self.device_box(path_bounds(&p), stroke.width * s.miter_limit.max(1.0));
+        self.draw_with(b, |pm, mask| pm.stroke_path(&p, &paint, &s, t, mask));
     }
 
     fn draw_image(&mut self, image: &Image, dst: Rect, fit: ImageFit, opacity: f32) {
@@ -472,7 +557,8 @@ impl Canvas for SkiaCanvas {
             return;
         };
         let t = self.device().to_skia();
-        self.draw_with(|pm, mask| pm.fill_rect(rect, &paint, t, mask));
+        let b = self.device_box(shown, 0.0);
+        self.draw_with(b, |pm, mask| pm.fill_rect(rect, &paint, t, mask));
     }
 
     fn draw_text(&mut self, txt: &str, at: Point, style: &TextStyle) -> TextMetrics {
@@ -537,7 +623,11 @@ impl Canvas for SkiaCanvas {
                 return metrics;
             };
             let t = dev.to_skia();
-            self.draw_with(|pm, mask| pm.fill_rect(rect, &paint, t, mask));
+            let b = self.device_box(
+                Rect::new(user_box.x - 1.0, user_box.y - 1.0, pw as f32, ph as f32),
+                0.0,
+            );
+            self.draw_with(b, |pm, mask| pm.fill_rect(rect, &paint, t, mask));
         }
         metrics
     }

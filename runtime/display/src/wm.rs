@@ -12,6 +12,7 @@ use crate::compose::LayerView;
 use crate::geom::{IRect, Size};
 use crate::paint;
 use crate::skia::SkiaCanvas;
+use crate::tiles::Tiles;
 use mocu_dataserver::{
     CallOptions, CallOutcome, DataServer, DsError, Executor, Guid, Kind, MethodSpec, Notification,
     ParamSpec, Subject, SubscriptionId, Topic, Value, ValueKind,
@@ -162,6 +163,10 @@ impl Shared {
 /// A layer: the last rendering of a window, owned by the frame thread.
 struct Layer {
     pixmap: Option<Pixmap>,
+    /// The pixmap's drawn-on tiles (the rest is transparent).
+    tiles: Option<Tiles>,
+    /// Every pixel of the pixmap is opaque.
+    opaque: bool,
     /// Window-local coordinates of pixmap pixel (0, 0).
     origin: (i32, i32),
     painted_size: (i32, i32),
@@ -187,6 +192,8 @@ impl Layer {
     fn new() -> Layer {
         Layer {
             pixmap: None,
+            tiles: None,
+            opaque: false,
             origin: (0, 0),
             painted_size: (0, 0),
             painted_clip: true,
@@ -483,6 +490,8 @@ impl WindowManager {
             out.push(LayerView {
                 window: *g,
                 pixmap: pm,
+                tiles: l.tiles.as_ref(),
+                opaque: l.opaque,
                 x: l.shown.x,
                 y: l.shown.y,
                 opacity: l.opacity,
@@ -528,17 +537,21 @@ impl WindowManager {
                 } else {
                     (size.0, size.1, (-r.x, -r.y))
                 };
-                let pm = match layer.pixmap.take() {
-                    // Cleared by the canvas before its first drawing, or not at all when
-                    // that drawing covers the layer opaquely.
-                    Some(pm) if pm.width() == pw && pm.height() == ph => pm,
+                let tiles = layer.tiles.take();
+                layer.origin = origin;
+                match layer.pixmap.take() {
+                    // Cleared by the canvas before its first drawing (only where the last
+                    // frame drew), or not at all when that drawing covers the layer
+                    // opaquely.
+                    Some(pm) if pm.width() == pw && pm.height() == ph => match tiles {
+                        Some(t) => SkiaCanvas::reusing_drawn(pm, t, origin, wsize),
+                        None => SkiaCanvas::reusing(pm, origin, wsize),
+                    },
                     _ => match Pixmap::new(pw, ph) {
-                        Some(pm) => pm,
+                        Some(pm) => SkiaCanvas::blank(pm, origin, wsize),
                         None => return,
                     },
-                };
-                layer.origin = origin;
-                SkiaCanvas::reusing(pm, origin, wsize)
+                }
             }
             Some(d) => {
                 let Some(pm) = &layer.pixmap else { return };
@@ -555,7 +568,7 @@ impl WindowManager {
                 }
                 let Some(scratch) = Pixmap::new(d.w as u32, d.h as u32) else { return };
                 scratch_at = d;
-                SkiaCanvas::new(scratch, (d.x, d.y), wsize)
+                SkiaCanvas::blank(scratch, (d.x, d.y), wsize)
             }
         };
         paint::install(canvas);
@@ -570,7 +583,7 @@ impl WindowManager {
         let outcome = outcome.lock().take();
         let layer = self.layers.get_mut(&g).expect("still there");
         let Some(canvas) = canvas else { return };
-        let drawn = canvas.into_pixmap();
+        let (drawn, drawn_tiles, drawn_opaque) = canvas.into_parts();
         let was_failed = layer.failed.take().is_some();
         layer.unclaimed = false;
         match outcome {
@@ -591,6 +604,8 @@ impl WindowManager {
             None => {
                 layer.changed = Some(IRect::new(0, 0, drawn.width() as i32, drawn.height() as i32));
                 layer.pixmap = Some(drawn);
+                layer.tiles = Some(drawn_tiles);
+                layer.opaque = drawn_opaque;
                 layer.painted_size = (r.w, r.h);
                 layer.painted_clip = props.clip;
                 layer.stale = false;
@@ -602,6 +617,14 @@ impl WindowManager {
                 // The scratch pixmap replaces its rectangle of the layer.
                 let at = scratch_at.offset(-layer.origin.0, -layer.origin.1);
                 copy_into(pm, &drawn, at.x, at.y);
+                // The scratch replaced its rectangle: drawn on (unless transparent), and
+                // opaque only if the scratch is.
+                if !drawn_tiles.is_empty()
+                    && let Some(t) = layer.tiles.as_mut()
+                {
+                    t.mark(at);
+                }
+                layer.opaque &= drawn_opaque;
                 layer.changed = Some(layer.changed.unwrap_or_default().union(&at));
                 layer.damage = IRect::default();
                 stats.partial.push(props.name.clone());

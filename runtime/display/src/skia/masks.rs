@@ -1,0 +1,124 @@
+//! Coverage masks of analytic shapes, kept between frames: a HUD draws the same rings and
+//! arcs at the same places frame after frame, and blending a cached mask is several times
+//! cheaper than working out each edge pixel's coverage again.
+//!
+//! A mask is keyed by everything its coverage depends on, device coordinates included, so
+//! a cached shape draws exactly the pixels the rasteriser would: the rasteriser draws the
+//! mask once (opaque black onto transparent pixels leaves the coverage in the alpha), and
+//! blending `colour x coverage` over the pixmap is the arithmetic the rasteriser's own
+//! blends do.
+
+use super::SkiaCanvas;
+use crate::color::Color;
+use crate::geom::IRect;
+use crate::pixel;
+use crate::tiles::Tiles;
+use parking_lot::Mutex;
+use std::collections::HashMap;
+use std::sync::{Arc, OnceLock};
+
+/// Masks kept (bytes, all masks together) before the cache is emptied.
+const CACHE_BYTES: usize = 16 << 20;
+/// The largest shape cached (pixels of its bounding box); larger ones draw directly.
+const MASK_MAX: i64 = 512 * 512;
+
+/// Where a rasteriser draws: pixels `w` wide whose (0, 0) is device pixel `(ox, oy)`.
+pub(super) struct Target<'a> {
+    px: &'a mut [[u8; 4]],
+    w: usize,
+    pub ox: i32,
+    oy: i32,
+    /// The pixmap's drawn-on tiles, when the target is the pixmap: elsewhere it is
+    /// transparent.
+    drawn: Option<&'a Tiles>,
+}
+
+impl Target<'_> {
+    /// Whether device pixels `x0..x1` of row `y` are known to be transparent (source-over
+    /// there is a copy).
+    #[inline]
+    pub fn clear(&self, y: i32, x0: i32, x1: i32) -> bool {
+        self.drawn.is_some_and(|t| !t.touches(IRect::new(x0, y, x1 - x0, 1)))
+    }
+
+    /// Device row `y`, indexed by `x - ox`.
+    #[inline]
+    pub fn row(&mut self, y: i32) -> &mut [[u8; 4]] {
+        &mut self.px[(y - self.oy) as usize * self.w..][..self.w]
+    }
+}
+
+struct Mask {
+    bbox: IRect,
+    data: Vec<u8>,
+}
+
+#[derive(Default)]
+struct Cache {
+    masks: HashMap<Box<[u32]>, Arc<Mask>>,
+    bytes: usize,
+}
+
+fn cache() -> &'static Mutex<Cache> {
+    static CACHE: OnceLock<Mutex<Cache>> = OnceLock::new();
+    CACHE.get_or_init(Mutex::default)
+}
+
+impl SkiaCanvas {
+    /// Draws a shape in `color`: `draw` rasterises it (drawing a premultiplied colour onto
+    /// a target, inside an area of device pixels), `bbox` is every pixel it may touch.
+    /// With a `key` (naming the shape exactly) the shape is drawn through its cached
+    /// coverage mask; without one, or when it is large, straight onto the pixmap.
+    pub(super) fn shape(
+        &mut self,
+        key: Option<&[u32]>,
+        bbox: IRect,
+        color: Color,
+        draw: impl FnOnce(&mut Target<'_>, IRect, [u8; 4]),
+    ) {
+        let area = bbox.intersect(&self.state.clip);
+        if area.is_empty() || color.a == 0 {
+            return;
+        }
+        let pre = pixel::premultiply(color);
+        self.ready();
+        let w = self.pixmap.width() as usize;
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        let Some(key) = key.filter(|_| bbox.area() <= MASK_MAX) else {
+            draw(&mut Target { px, w, ox: 0, oy: 0, drawn: Some(&self.tiles) }, area, pre);
+            self.tiles.mark(area);
+            return;
+        };
+        self.tiles.mark(area);
+        let found = cache().lock().masks.get(key).cloned();
+        let mask = match found {
+            Some(m) if m.bbox == bbox => m,
+            _ => {
+                let m = Arc::new(rasterise(bbox, draw));
+                let mut c = cache().lock();
+                if c.bytes + m.data.len() > CACHE_BYTES {
+                    c.masks.clear();
+                    c.bytes = 0;
+                }
+                c.bytes += m.data.len();
+                c.masks.insert(key.into(), m.clone());
+                m
+            }
+        };
+        let (mw, cx) = (bbox.w as usize, (area.x - bbox.x) as usize);
+        for y in area.y..area.bottom() {
+            let m = &mask.data[(y - bbox.y) as usize * mw + cx..][..area.w as usize];
+            let row = &mut px[y as usize * w + area.x as usize..][..area.w as usize];
+            pixel::cover_row(row, pre, m);
+        }
+    }
+}
+
+/// The coverage of the shape `draw` rasterises inside `bbox`.
+fn rasterise(bbox: IRect, draw: impl FnOnce(&mut Target<'_>, IRect, [u8; 4])) -> Mask {
+    let (w, h) = (bbox.w as usize, bbox.h as usize);
+    let mut px = vec![[0u8; 4]; w * h];
+    let mut t = Target { px: &mut px, w, ox: bbox.x, oy: bbox.y, drawn: None };
+    draw(&mut t, bbox, [0, 0, 0, 255]);
+    Mask { bbox, data: px.iter().map(|p| p[3]).collect() }
+}
