@@ -314,7 +314,6 @@ const LONG_FILES: &[&str] = &[
     "compiler/language/src/passes/check_types.rs",
     "compiler/language/src/parser.rs",
     "runtime/dataserver/tests/model_equivalence.rs",
-    "runtime/widgets/src/renderer.rs",
     "runtime/display/src/wm.rs",
 ];
 
