@@ -13,7 +13,6 @@ use mocu_dataserver::{
     ValueKind,
 };
 use mocu_host::{Module, ModuleContext, ModuleSpec};
-use openh264::formats::YUVSource;
 use parking_lot::Mutex;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -81,10 +80,7 @@ impl std::fmt::Display for DecodeError {
 /// A decoder for one stream (it keeps the H.264 decoder's reference pictures).
 #[derive(Default)]
 pub struct Decoder {
-    h264: Option<openh264::decoder::Decoder>,
-    /// The last H.264 SPS declared a size over the limits: units are refused until one
-    /// within them comes (the decoder never saw that SPS).
-    h264_refusing: bool,
+    h264: crate::h264dec::H264Decoder,
 }
 
 impl Decoder {
@@ -111,35 +107,7 @@ impl Decoder {
         }
         match codec {
             Codec::Jpeg => decode_jpeg_limited(data, limits).map(Some),
-            Codec::H264 => {
-                if let Some((width, height)) = crate::h264::unit_size(data) {
-                    self.h264_refusing = !limits.allows(width, height);
-                    if self.h264_refusing {
-                        return Err(DecodeError::Refused { width, height });
-                    }
-                } else if self.h264_refusing {
-                    return Err(DecodeError::Refused { width: 0, height: 0 });
-                }
-                if self.h264.is_none() {
-                    let d = openh264::decoder::Decoder::new()
-                        .map_err(|e| DecodeError::Failed(e.to_string()))?;
-                    self.h264 = Some(d);
-                }
-                let d = self.h264.as_mut().expect("made above");
-                match d.decode(&crate::h264::allow_frame_num_gaps(data)) {
-                    Ok(Some(yuv)) => {
-                        let (w, h) = yuv.dimensions();
-                        if !limits.allows(w as u32, h as u32) {
-                            return Err(DecodeError::Refused { width: w as u32, height: h as u32 });
-                        }
-                        let mut rgba = vec![0u8; w * h * 4];
-                        yuv.write_rgba8(&mut rgba);
-                        Ok(Some(DecodedFrame { rgba, width: w as u32, height: h as u32 }))
-                    }
-                    Ok(None) => Ok(None),
-                    Err(e) => Err(DecodeError::Failed(e.to_string())),
-                }
-            }
+            Codec::H264 => self.h264.decode(data, limits),
         }
     }
 }
@@ -345,13 +313,10 @@ fn on_unit(ds: &DataServer, camera: Guid, state: &Mutex<DecodeState>, u: &Encode
         Err(DecodeError::Refused { .. }) => st.refused += 1,
         Err(DecodeError::Failed(_)) => st.errors += 1,
     }
-    let network =
-        ds.try_get(camera, "dropped_network".into()).and_then(|v| v.as_i64()).unwrap_or(0);
-    let dropped = network + st.dropped_queue + st.refused + st.no_picture;
-    // Counters on every unit (they add up: see docs/video.md), rates once a period.
+    // Counters on every unit (they add up: see docs/video.md; the receiver sums `dropped`),
+    // rates once a period.
     for (k, v) in [
         ("frames", Value::Int(st.frames)),
-        ("dropped", Value::Int(dropped)),
         ("dropped_queue", Value::Int(st.dropped_queue)),
         ("refused", Value::Int(st.refused)),
         ("no_picture", Value::Int(st.no_picture)),

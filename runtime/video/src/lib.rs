@@ -37,6 +37,7 @@ mod clock;
 pub mod codec;
 mod frame;
 pub mod h264;
+mod h264dec;
 pub mod jitter;
 pub mod limits;
 pub mod mjpeg;

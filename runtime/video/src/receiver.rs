@@ -258,9 +258,12 @@ fn receive(
             let _ = ds.set(camera, "sender", Value::str(&from));
         }
         let st = stream.stats();
-        // Counters are published before the units they count reach the decoder's
-        // statistics, and whenever they changed.
+        // Counters are published whenever they changed, and every period: `dropped` sums
+        // the receiver's drops and the decoder's (its one writer is this thread).
         if published != Some(st) || meter.tick(0) {
+            let get = |k: &str| ds.try_get(camera, k.into()).and_then(|v| v.as_i64()).unwrap_or(0);
+            let decoder = get("dropped_queue") + get("refused") + get("no_picture");
+            let _ = ds.set(camera, "dropped", Value::Int(st.dropped as i64 + decoder));
             published = Some(st);
             if stream.transport() != transport {
                 transport = stream.transport();

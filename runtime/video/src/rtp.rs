@@ -123,6 +123,8 @@ pub struct H264Depacketizer {
     in_fu: bool,
     seen_sps: bool,
     oversize: bool,
+    /// Size of the current FU-A's first fragment.
+    fu_size: usize,
     /// Largest access unit kept (0: the default limit).
     max_bytes: usize,
     pub stats: DepackStats,
@@ -149,15 +151,19 @@ impl H264Depacketizer {
     /// Feeds one packet; `emit` gets each completed access unit.
     pub fn push(&mut self, p: &RtpPacket, emit: &mut dyn FnMut(Unit)) {
         let Some(gap) = self.seq.next(p.ssrc, p.sequence) else { return };
+        if gap > 0 {
+            self.stats.lost_packets += gap;
+            // The unit in progress lost packets (its end, if this one starts another).
+            self.broken |= !self.au.is_empty() || self.in_fu;
+            self.in_fu = false;
+        }
         if self.ts.is_some_and(|t| t != p.timestamp) {
             self.flush(emit);
         }
-        if gap > 0 {
-            self.stats.lost_packets += gap;
-            if !self.au.is_empty() || self.in_fu {
-                self.broken = true;
-            }
-            self.in_fu = false;
+        // Packets lost just before this one: this unit lost its beginning, unless this
+        // packet starts an access unit (then only whole units were lost).
+        if gap > 0 && self.au.is_empty() && !starts_access_unit(p.payload) {
+            self.broken = true;
         }
         self.ts = Some(p.timestamp);
         self.payload(p.payload);
@@ -219,7 +225,18 @@ impl H264Depacketizer {
                     return;
                 };
                 let (start, end) = (fu & 0x80 != 0, fu & 0x40 != 0);
+                // Packetizers (ffmpeg, GStreamer, live555) fill every fragment but the last
+                // to the same size: a shorter one, or a start shorter than what follows,
+                // was cut on the way (a truncated datagram).
+                let size = pl.len();
+                if !start && self.in_fu {
+                    let expected = self.fu_size;
+                    if size > expected || (!end && size < expected) {
+                        self.broken = true;
+                    }
+                }
                 if start {
+                    self.fu_size = size;
                     self.in_fu = true;
                     let header = (h & 0xe0) | (fu & 0x1f);
                     let mut first = Vec::with_capacity(pl.len() - 1);
@@ -264,6 +281,25 @@ impl H264Depacketizer {
         } else {
             emit(Unit { data: au, timestamp: ts.unwrap_or(0), key });
         }
+    }
+}
+
+/// Whether an RTP/H.264 payload starts an access unit: a parameter set, SEI or delimiter,
+/// or the first slice of a picture (`first_mb_in_slice` = 0), alone, first in a STAP-A, or
+/// in a FU-A's first fragment.
+pub fn starts_access_unit(payload: &[u8]) -> bool {
+    let starts = |nal_type: u8, first_byte: Option<&u8>| match nal_type {
+        6..=9 => true,
+        1 | 5 => first_byte.is_some_and(|b| b & 0x80 != 0),
+        _ => false,
+    };
+    match payload.first().map(|h| h & 0x1f) {
+        Some(t @ 1..=23) => starts(t, payload.get(1)),
+        Some(24) => payload.get(3).is_some_and(|h| starts(h & 0x1f, payload.get(4))),
+        Some(28) => {
+            payload.get(1).is_some_and(|fu| fu & 0x80 != 0 && starts(fu & 0x1f, payload.get(2)))
+        }
+        _ => false,
     }
 }
 
@@ -374,15 +410,15 @@ mod tests {
         let packets = vec![
             pkt(1, 100, false, &stap(&[SPS, PPS])),
             pkt(2, 100, false, &[0x7c, 0x85, 10, 11]), // FU-A start, type 5
-            pkt(3, 100, false, &[0x7c, 0x05, 12]),
-            pkt(4, 100, true, &[0x7c, 0x45, 13]), // end
-            pkt(5, 200, true, &[0x41, 9, 9]),     // single NAL, P slice
+            pkt(3, 100, false, &[0x7c, 0x05, 12, 12]), // as long as the start
+            pkt(4, 100, true, &[0x7c, 0x45, 13]),      // end
+            pkt(5, 200, true, &[0x41, 9, 9]),          // single NAL, P slice
         ];
         let (units, stats) = run(&packets);
         assert_eq!(units.len(), 2);
         assert!(units[0].key && !units[1].key);
         let nals = annexb_nals(&units[0].data);
-        assert_eq!(nals, vec![SPS, PPS, &[0x65, 10, 11, 12, 13][..]]);
+        assert_eq!(nals, vec![SPS, PPS, &[0x65, 10, 11, 12, 12, 13][..]]);
         assert_eq!(&idr_a[..3], &nals[2][..3]);
         assert_eq!(annexb_nals(&units[1].data), vec![&[0x41, 9, 9][..]]);
         assert_eq!(stats, DepackStats { units: 2, ..DepackStats::default() });
@@ -401,6 +437,51 @@ mod tests {
         assert_eq!(units.len(), 2, "SPS unit and the P slice");
         assert_eq!(stats.lost_packets, 1);
         assert_eq!(stats.dropped_units, 1);
+    }
+
+    #[test]
+    fn a_unit_that_lost_its_beginning_or_its_end_is_dropped() {
+        let slice = |first_mb_zero: bool| [0x41, if first_mb_zero { 0x80 } else { 0x40 }, 1];
+        let packets = vec![
+            pkt(1, 100, true, &stap(&[SPS, PPS])),
+            pkt(2, 200, false, &slice(true)),
+            // seq 3 lost: the end of unit 200
+            pkt(4, 300, false, &slice(true)),
+            pkt(5, 300, true, &slice(false)),
+            // seq 6 lost: the beginning of unit 400
+            pkt(7, 400, true, &slice(false)),
+            // seq 8 lost: a whole unit
+            pkt(9, 600, true, &slice(true)),
+        ];
+        let (units, stats) = run(&packets);
+        let ts: Vec<u32> = units.iter().map(|u| u.timestamp).collect();
+        assert_eq!(ts, vec![100, 300, 600]);
+        assert_eq!((stats.units, stats.dropped_units, stats.lost_packets), (5, 2, 3));
+    }
+
+    #[test]
+    fn a_fragment_shorter_than_its_siblings_was_truncated() {
+        let packets = vec![
+            pkt(1, 100, true, &stap(&[SPS, PPS])),
+            pkt(2, 200, false, &[0x7c, 0x85, 1, 2, 3]),
+            pkt(3, 200, false, &[0x7c, 0x05, 4, 5]), // cut
+            pkt(4, 200, true, &[0x7c, 0x45, 6]),
+            pkt(5, 300, false, &[0x7c, 0x85, 1, 2, 3]),
+            pkt(6, 300, true, &[0x7c, 0x45, 4, 5, 6, 7]), // longer than the start: it was cut
+        ];
+        let (units, stats) = run(&packets);
+        assert_eq!(units.len(), 1);
+        assert_eq!(stats.dropped_units, 2);
+    }
+
+    #[test]
+    fn access_unit_starts_are_told_by_first_mb_or_parameter_sets() {
+        assert!(starts_access_unit(&[0x65, 0x88]));
+        assert!(!starts_access_unit(&[0x41, 0x40]), "a second slice");
+        assert!(starts_access_unit(&stap(&[SPS, PPS])));
+        assert!(starts_access_unit(&[0x7c, 0x85, 0x88]));
+        assert!(!starts_access_unit(&[0x7c, 0x05, 0x88]), "a middle fragment");
+        assert!(!starts_access_unit(&[]));
     }
 
     #[test]

@@ -53,14 +53,14 @@ impl JpegDepacketizer {
 
     pub fn push(&mut self, p: &RtpPacket, emit: &mut dyn FnMut(Unit)) {
         let Some(gap) = self.seq.next(p.ssrc, p.sequence) else { return };
-        if self.ts.is_some_and(|t| t != p.timestamp) {
-            self.flush(emit);
-        }
         if gap > 0 {
             self.stats.lost_packets += gap;
-            if self.ts.is_some() {
-                self.broken = true;
-            }
+            // The frame in progress lost packets (its end, if this one starts another);
+            // a frame that lost its beginning is caught by its fragment offsets.
+            self.broken |= self.ts.is_some();
+        }
+        if self.ts.is_some_and(|t| t != p.timestamp) {
+            self.flush(emit);
         }
         self.ts = Some(p.timestamp);
         if self.packet(p.payload).is_none() {

@@ -121,13 +121,26 @@ fn wait_for(r: &Running, want: impl Fn(&Counters) -> bool) -> Counters {
 /// Streams 4 s of testsrc (640×480, 30 fps) through a relay with `imp`; returns what the
 /// relay counted and the camera's settled counters.
 fn through_relay(kind: Kind, imp: Impairment, label: &str) -> (RelayCounts, Counters) {
+    through_relay_from("testsrc=size=640x480:rate=30", kind, imp, label)
+}
+
+/// testsrc2 at 640×480: everything moves, about 8 RTP packets a frame (2.5 Mbit/s), so a
+/// lost packet costs a frame 8 times as often as with testsrc.
+const MOVING: &str = "testsrc2=size=640x480:rate=30";
+
+fn through_relay_from(
+    src: &str,
+    kind: Kind,
+    imp: Impairment,
+    label: &str,
+) -> (RelayCounts, Counters) {
     // One stream at a time: a decoder sharing the machine with several others would fall
     // behind and drop from its queue, which is not what these tests measure.
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let imp = Impairment { clean_first: 12, ..imp };
     let mut r = receiver();
     let relay = Relay::start(r.port, imp);
-    Ffmpeg::stream(kind, 640, 480, relay.port, 4).wait();
+    Ffmpeg::stream_source(src, kind, relay.port, 4, &[], "").wait();
     let link = relay.finish();
     let c = wait_for(&r, |c| c.sent + c.late_packets + c.ignored >= link.frames_reached as i64);
     r.module.stop();
@@ -156,36 +169,36 @@ fn shown(link: &RelayCounts, c: &Counters) -> f64 {
 
 #[test]
 fn h264_over_a_clean_link_shows_every_frame() {
-    let (link, c) = through_relay(Kind::RtpH264, lossy(0.0, 1), "h264 0%");
+    let (link, c) = through_relay_from(MOVING, Kind::RtpH264, lossy(0.0, 1), "h264 0%");
     assert_eq!(c.sent, link.frames_sent as i64);
     assert_eq!(c.frames + c.dropped_queue, c.sent, "{c:?}");
     assert_eq!((c.dropped_network, c.decode_errors, c.lost_packets), (0, 0, 0));
 }
 
 #[test]
-fn h264_at_1_percent_loss_shows_at_least_90_percent_of_the_frames() {
-    let (link, c) = through_relay(Kind::RtpH264, lossy(0.01, 11), "h264 1%");
-    assert!(shown(&link, &c) >= 0.9, "{c:?}");
+fn h264_at_1_percent_loss_shows_at_least_85_percent_of_the_frames() {
+    let (link, c) = through_relay_from(MOVING, Kind::RtpH264, lossy(0.01, 11), "h264 1%");
+    assert!(shown(&link, &c) >= 0.85, "{c:?}");
 }
 
 #[test]
 fn h264_at_2_percent_loss_shows_at_least_80_percent_of_the_frames() {
-    let (link, c) = through_relay(Kind::RtpH264, lossy(0.02, 22), "h264 2%");
+    let (link, c) = through_relay_from(MOVING, Kind::RtpH264, lossy(0.02, 22), "h264 2%");
     assert!(link.lost > 0 && c.lost_packets > 0, "{c:?}");
     assert!(shown(&link, &c) >= 0.8, "{c:?}");
 }
 
 #[test]
-fn h264_at_5_percent_loss_keeps_showing_most_frames() {
-    let (link, c) = through_relay(Kind::RtpH264, lossy(0.05, 55), "h264 5%");
+fn h264_at_5_percent_loss_keeps_showing_at_least_half_the_frames() {
+    let (link, c) = through_relay_from(MOVING, Kind::RtpH264, lossy(0.05, 55), "h264 5%");
     assert!(link.lost > 0 && c.lost_packets > 0, "{c:?}");
-    assert!(shown(&link, &c) >= 0.7, "{c:?}");
+    assert!(shown(&link, &c) >= 0.5, "{c:?}");
 }
 
 #[test]
 fn h264_with_reordered_packets_loses_no_frame() {
     let imp = Impairment { reorder: 0.05, seed: 7, ..Impairment::default() };
-    let (link, c) = through_relay(Kind::RtpH264, imp, "h264 reorder 5%");
+    let (link, c) = through_relay_from(MOVING, Kind::RtpH264, imp, "h264 reorder 5%");
     assert!(link.reordered > 0 && c.reordered > 0, "{c:?}");
     assert_eq!((c.dropped_network, c.lost_packets, c.late_packets), (0, 0, 0), "{c:?}");
     assert_eq!(c.frames + c.dropped_queue, link.frames_sent as i64, "{c:?}");
@@ -194,10 +207,10 @@ fn h264_with_reordered_packets_loses_no_frame() {
 #[test]
 fn h264_with_truncated_packets_keeps_showing_frames() {
     let imp = Impairment { truncate: 0.05, seed: 5, ..Impairment::default() };
-    let (link, c) = through_relay(Kind::RtpH264, imp, "h264 truncate 5%");
+    let (link, c) = through_relay_from(MOVING, Kind::RtpH264, imp, "h264 truncate 5%");
     assert!(link.truncated > 0);
     assert!(c.dropped_network + c.decode_errors > 0, "truncation noticed: {c:?}");
-    assert!(shown(&link, &c) >= 0.3, "{c:?}");
+    assert!(shown(&link, &c) >= 0.5, "decoding recovers after errors: {c:?}");
 }
 
 #[test]

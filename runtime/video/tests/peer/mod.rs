@@ -48,8 +48,28 @@ impl Ffmpeg {
         extra: &[&str],
         query: &str,
     ) -> Ffmpeg {
+        Ffmpeg::stream_source(
+            &format!("testsrc=size={w}x{h}:rate=30"),
+            kind,
+            port,
+            secs,
+            extra,
+            query,
+        )
+    }
+
+    /// As [`Ffmpeg::stream_with`], from any lavfi source (`testsrc2=size=640x480:rate=30`
+    /// moves everywhere: a realistic 8 packets a frame where testsrc needs 1.3).
+    pub fn stream_source(
+        src: &str,
+        kind: Kind,
+        port: u16,
+        secs: u32,
+        extra: &[&str],
+        query: &str,
+    ) -> Ffmpeg {
         require_ffmpeg();
-        let src = format!("testsrc=size={w}x{h}:rate=30");
+        let src = src.to_string();
         let mut args: Vec<String> = vec![
             "-s".into(),
             "INT".into(),
