@@ -166,6 +166,49 @@ fn publish_layer(ds: &DataServer, display: Guid, screen: (f64, f64)) -> Result<G
 /// Height of the built-in window: a count line and four alert rows.
 const ROWS_HEIGHT: f64 = 200.0;
 
+/// The top band the built-in window stays below: the state header and the heading tape.
+pub const BELOW: [&str; 2] = ["StatusHeader", "HeadingTape"];
+/// Space between the band and the window, px.
+const BAND_GAP: f64 = 6.0;
+
+/// Moves the built-in window below the top band — the lowest bottom edge of the evaluated
+/// [`BELOW`] widgets in the top half of the screen — so that alerts never cover the state
+/// header or the heading tape; it keeps [`ROWS_HEIGHT`] on screen. Runs after each load
+/// and reload has evaluated the widgets' positions.
+pub(crate) fn place_layer(sh: &Shared, st: &State) {
+    let ds = &sh.ds;
+    let Some(layer) = ds.find_child(st.display, WINDOW).ok().flatten() else { return };
+    let screen_h = sh.config.screen.1;
+    let num = |g: Guid, k: &str| ds.try_get(g, k.into()).and_then(|v| v.as_f64());
+    let mut band: f64 = 0.0;
+    for win in ds.children(st.display).unwrap_or_default() {
+        if win == layer || ds.try_get(win, "visible".into()) == Some(Value::Bool(false)) {
+            continue;
+        }
+        let wy = num(win, "y").unwrap_or(0.0);
+        for w in ds.children(win).unwrap_or_default() {
+            let comp = ds.try_get(w, "component".into());
+            if !comp.as_ref().and_then(Value::as_str).is_some_and(|c| BELOW.contains(&c)) {
+                continue;
+            }
+            let (Some(y), Some(h)) = (num(w, "y"), num(w, "h")) else { continue };
+            if wy + y < screen_h / 2.0 {
+                band = band.max(wy + y + h);
+            }
+        }
+    }
+    let y = if band > 0.0 { band + BAND_GAP } else { 0.0 };
+    let y = y.min((screen_h - ROWS_HEIGHT).max(0.0)).round();
+    let h = (screen_h - y).min(ROWS_HEIGHT);
+    if num(layer, "y") != Some(y) || num(layer, "h") != Some(h) {
+        let _ = ds.set(layer, "y", Value::Float(y));
+        let _ = ds.set(layer, "h", Value::Float(h));
+        if let Some(wg) = ds.find_child(layer, "alerts").ok().flatten() {
+            let _ = ds.set(wg, "h", Value::Float(h));
+        }
+    }
+}
+
 /// Escape (keyboard) and `select` (gamepad) acknowledge every alert, unless the layout binds
 /// those inputs itself: (binding key, actions) pairs as the layout's bindings are kept.
 pub(crate) fn builtin_bindings(program: &Program) -> Vec<(String, Vec<CompiledAction>)> {

@@ -19,7 +19,7 @@ use std::time::Duration;
 mod compile;
 mod instances;
 pub(crate) use compile::{
-    Builder, CompiledWidget, CompiledWindow, FnRef, compile_template, compile_widget,
+    Builder, CompiledWidget, CompiledWindow, FnRef, Frame, compile_template, compile_widget,
     compile_window,
 };
 pub(crate) use instances::{Instance, TemplateRt};
@@ -40,6 +40,9 @@ pub struct LayoutConfig {
     pub alert_layer: bool,
     /// Write each alert once on the terminal (stderr).
     pub alerts_to_terminal: bool,
+    /// How long a property stays fresh, by (object type, property): the schema's
+    /// `stale_after` ([`LayoutConfig::stale_after_from`]); see `stale.rs` for the defaults.
+    pub stale_after: HashMap<(String, String), Duration>,
 }
 
 impl Default for LayoutConfig {
@@ -51,6 +54,7 @@ impl Default for LayoutConfig {
             name: "layout".into(),
             alert_layer: true,
             alerts_to_terminal: true,
+            stale_after: HashMap::new(),
         }
     }
 }
@@ -217,6 +221,7 @@ impl Layout {
             let mut st = shared.state.lock();
             shared.apply(&mut st, program)?;
             shared.evaluate(&mut st);
+            crate::alerts::place_layer(&shared, &st);
         }
         shared.sink.record("load", &[("layout", Value::str(&shared.config.name))]);
         Ok(Layout { shared })
@@ -232,6 +237,7 @@ impl Layout {
             let mut st = self.shared.state.lock();
             let stats = self.shared.apply(&mut st, program)?;
             self.shared.evaluate(&mut st);
+            crate::alerts::place_layer(&self.shared, &st);
             stats
         };
         self.shared.sink.record(

@@ -9,6 +9,8 @@
 //! - `actions`: set / call / swap / show / hide / alert, with control feedback.
 //! - `alerts`: alerts and failed commands always reach the operator (world model, log,
 //!   terminal, and a built-in alert window unless the layout places an `AlertLayer`).
+//! - `clock`: `root.operator.clock` (`utc`, `time`) on the DataServer's clock, while the
+//!   layout reads it.
 //! - [`events`]: the trial's event log.
 //!
 //! Architecture invariant: a layout talks to the rest of the OCU only through the
@@ -19,6 +21,7 @@
 
 mod actions;
 mod alerts;
+mod clock;
 pub mod events;
 pub mod graph;
 pub use mocu_lower as lower;

@@ -5,7 +5,7 @@
 
 use crate::actions;
 use crate::graph::{
-    Builder, CompiledWidget, CompiledWindow, LoadError, Shared, State, compile_template,
+    Builder, CompiledWidget, CompiledWindow, Frame, LoadError, Shared, State, compile_template,
     compile_widget, compile_window,
 };
 use mocu_language::program::Program;
@@ -67,19 +67,28 @@ enum Def<'a> {
 
 fn items(program: &Program) -> Vec<(ItemKey, String, Def<'_>)> {
     let mut out = Vec::new();
+    // A changed design changes every placed item; a widget measured from its window's far
+    // edge changes with the window.
+    let design = format!("{:?}", program.design);
     for w in &program.windows {
-        out.push((ItemKey::Window(w.name.clone()), canon(w), Def::Window(w)));
+        out.push((ItemKey::Window(w.name.clone()), design.clone() + &canon(w), Def::Window(w)));
     }
     for (i, w) in program.widgets.iter().enumerate() {
         let name = w.name.clone().unwrap_or_else(|| format!("{}#{i}", w.component));
-        out.push((ItemKey::Widget(w.window.clone(), name), canon(w), Def::Widget(i, w)));
+        let mut text = design.clone() + &canon(w);
+        if !w.anchor.is_default()
+            && let Some(win) = program.windows.iter().find(|x| x.name == w.window)
+        {
+            text += &canon(&win.rect);
+        }
+        out.push((ItemKey::Widget(w.window.clone(), name), text, Def::Widget(i, w)));
     }
     for w in &program.watches {
         out.push((ItemKey::Watch(w.name.clone()), canon(w), Def::Watch(w)));
     }
     for t in &program.templates {
         let key = format!("{}@{}", t.var, t.source);
-        out.push((ItemKey::Template(key), canon(t), Def::Template(t)));
+        out.push((ItemKey::Template(key), design.clone() + &canon(t), Def::Template(t)));
     }
     out.push((ItemKey::Bindings, canon(&program.bindings), Def::Bindings));
     out
@@ -102,6 +111,8 @@ impl Shared {
         program: &Program,
     ) -> Result<ReloadStats, LoadError> {
         let screen = self.config.screen;
+        let frame = Frame::of(program, screen);
+        let _ = self.ds.set(st.display, "scale", Value::Float(frame.scale));
         let lower = |e: crate::lower::LowerError| LoadError::Lower(e.to_string());
         let new = items(program);
         // 1. Compile what is new or changed (one compilation for all of it).
@@ -114,11 +125,15 @@ impl Shared {
                 continue;
             }
             let c = match def {
-                Def::Window(w) => Compiled::Window(compile_window(&mut b, w, screen)?),
-                Def::Widget(i, w) => Compiled::Widget(*i, compile_widget(&mut b, w, *i, screen)?),
+                Def::Window(w) => Compiled::Window(compile_window(&mut b, w, frame)?),
+                Def::Widget(i, w) => {
+                    let win = program.windows.iter().find(|x| x.name == w.window);
+                    Compiled::Widget(*i, compile_widget(&mut b, w, *i, frame, win)?)
+                }
                 Def::Watch(w) => Compiled::Watch(crate::watch::compile_watch(&mut b, w, screen)?),
                 Def::Template(t) => {
-                    Compiled::Template(Box::new(compile_template(&mut b, t, screen)?))
+                    let t = compile_template(&mut b, t, frame, &program.windows)?;
+                    Compiled::Template(Box::new(t))
                 }
                 Def::Bindings => {
                     let mut list = Vec::new();
@@ -258,6 +273,7 @@ impl Shared {
         }
         crate::menu::publish_menus(self, st, program);
         crate::alerts::ensure_layer(self, st, program);
+        crate::clock::follow(self, program);
         // Declaration order decides stacking among equal layers.
         for (i, w) in program.windows.iter().enumerate() {
             if let Some(g) = st.windows.get(&w.name) {

@@ -8,7 +8,7 @@
 //! coverage may step differently on CPUs with other SIMD paths. A mismatching frame is
 //! written to `target/tmp/golden-actual/` for inspection.
 
-use mocu_dataserver::{Config, DataServer, Guid, Value};
+use mocu_dataserver::{Config, DataServer, Guid, ManualClock, Value};
 use mocu_display::{Clock, Display, DisplayOptions, PointerEvent};
 use mocu_host::ModuleContext;
 use mocu_layout::{Layout, LayoutConfig, NullSink};
@@ -39,7 +39,10 @@ impl Rig {
         let (bundle, _) = mocu_language::load_target(file)
             .unwrap_or_else(|e| panic!("{}: {e:?}", file.display()));
         let program = &bundle.layouts[0].program;
-        let ds = DataServer::new(Config { workers: 2 });
+        // The server's clock reads 14:03:07 UTC (the status header's clock) and stands still.
+        let clock = ManualClock::new();
+        clock.set_wall(std::time::UNIX_EPOCH + Duration::from_secs(86_400 * 20_000 + 50_587));
+        let ds = DataServer::with_clock(Config { workers: 2 }, Arc::new(clock));
         let display =
             Display::new(&ds, DisplayOptions::new(size.0, size.1).clock(Clock::manual())).unwrap();
         let lib = Library::compile(program, true).unwrap();
@@ -326,7 +329,45 @@ fn every_shipped_layout_at_three_screen_sizes_with_alerts_and_stale_data() {
             rig.ds.set(v, "stale", Value::Bool(true)).unwrap();
             rig.ds.set(v, "link_lost", Value::Bool(true)).unwrap();
             let f = rig.frame();
+            alerts_cover_neither_header_nor_tape(&rig.ds, &format!("{name} {size:?}"));
             check_golden(&format!("screen_{name}_{}x{}", size.0, size.1), &f);
+        }
+    }
+}
+
+/// A window's or widget's rectangle on the screen: x, y, w, h.
+type ScreenRect = (f64, f64, f64, f64);
+
+fn rect_of(ds: &DataServer, g: Guid, origin: (f64, f64)) -> ScreenRect {
+    let n = |k: &str| ds.try_get(g, k.into()).and_then(|v| v.as_f64()).unwrap_or(0.0);
+    (origin.0 + n("x"), origin.1 + n("y"), n("w"), n("h"))
+}
+
+fn overlap(a: ScreenRect, b: ScreenRect) -> bool {
+    a.0 < b.0 + b.2 && b.0 < a.0 + a.2 && a.1 < b.1 + b.3 && b.1 < a.1 + a.3
+}
+
+/// The built-in alert layer's window overlaps no `StatusHeader` or `HeadingTape` of the
+/// layout (the top band): alerts never cover the vehicle's state or its heading.
+fn alerts_cover_neither_header_nor_tape(ds: &DataServer, what: &str) {
+    let display = ds.resolve(&["display"]).unwrap();
+    let layer = ds.resolve(&["display", "alert_layer"]).expect("the built-in alert layer");
+    let alerts = rect_of(ds, layer, (0.0, 0.0));
+    for win in ds.children(display).unwrap() {
+        if win == layer || ds.try_get(win, "visible".into()) == Some(Value::Bool(false)) {
+            continue;
+        }
+        let origin = rect_of(ds, win, (0.0, 0.0));
+        for w in ds.children(win).unwrap() {
+            let comp = ds.try_get(w, "component".into());
+            let comp = comp.as_ref().and_then(Value::as_str).unwrap_or_default();
+            if comp == "StatusHeader" || comp == "HeadingTape" {
+                let r = rect_of(ds, w, (origin.0, origin.1));
+                assert!(
+                    !overlap(alerts, r),
+                    "{what}: the alert layer {alerts:?} covers {comp} {r:?}"
+                );
+            }
         }
     }
 }
