@@ -42,6 +42,37 @@ const UNIT_WORDS: &[(&str, &str)] = &[
     ("percent", "%"),
 ];
 
+/// Words each item reads besides names and expressions, for "did you mean `when`?" when a
+/// syntax error sits on a near miss of one.
+const ITEM_WORDS: &[(&str, &[&str])] = &[
+    ("watch", &["when", "for", "clear", "repeat", "every", "then"]),
+    ("window", &["rect", "layer", "at", "on"]),
+    ("in", &["at", "on"]),
+    ("for", &["each", "in", "of", "type"]),
+    ("menu", &["for", "type", "item"]),
+    ("bind", &["button", "axis", "key", "wheel", "shift", "mode", "hold", "double", "release"]),
+    ("use", &["as"]),
+];
+
+/// Key names people write for the keys the language calls otherwise.
+const KEY_ALIASES: &[(&str, &str)] = &[
+    ("spacebar", "space"),
+    ("space_bar", "space"),
+    ("esc", "escape"),
+    ("return", "enter"),
+    ("del", "delete"),
+    ("ins", "insert"),
+    ("bksp", "backspace"),
+    ("pgup", "page_up"),
+    ("pageup", "page_up"),
+    ("pgdn", "page_down"),
+    ("pagedown", "page_down"),
+    ("arrow_up", "up"),
+    ("arrow_down", "down"),
+    ("arrow_left", "left"),
+    ("arrow_right", "right"),
+];
+
 pub const UNITS: &str =
     "units are ms, s, min, px, deg and %, written right after the number (`5s`)";
 
@@ -83,8 +114,20 @@ pub fn hint(
             format!("{fix}{UNITS}"),
         ));
     }
-    if matches!(found, "to" | "-") && prev.parse::<f64>().is_ok() && before.contains("range") {
-        return Some((None, format!("a range is written `range {prev} .. MAX`")));
+    if prev.parse::<f64>().is_ok()
+        && (matches!(found, "to" | "-") || found.parse::<f64>().is_ok())
+        && before.contains("range")
+    {
+        let max = if found.parse::<f64>().is_ok() { found } else { "MAX" };
+        // The parameter's name when it stands right before the minimum (`range 0 40`).
+        let name = before.split_whitespace().rev().nth(1).filter(|w| is_word(w)).unwrap_or("");
+        return Some((
+            Some(format!("`{found}` after `{prev}`: a range needs `..` between its ends")),
+            range_help(name, prev, max),
+        ));
+    }
+    if let Some(h) = near_miss(item, before, found, message) {
+        return Some(h);
     }
     if item == "for" && matches!(found, "bind" | "menu" | "component" | "use" | "for") {
         return Some((
@@ -117,6 +160,62 @@ pub fn hint(
     None
 }
 
+/// "did you mean `window`?" for a word at a syntax error that is one slip away from a word
+/// the item reads there: the words pest expected (quoted in `message`), the item's own
+/// words, and the item keywords when a new item could start.
+fn near_miss(
+    item: &str,
+    before: &str,
+    found: &str,
+    message: &str,
+) -> Option<(Option<String>, String)> {
+    if !found.starts_with(|c: char| c.is_ascii_lowercase()) || !is_word(found) {
+        return None;
+    }
+    let mut words: Vec<&str> = message.split('`').skip(1).step_by(2).collect();
+    words.extend(ITEM_WORDS.iter().filter(|(k, _)| *k == item).flat_map(|(_, w)| w.iter()));
+    // A word alone at the start of a line after a complete item: a misspelt item keyword.
+    let line_start = before.trim_end_matches([' ', '\t']).ends_with('\n');
+    let new_item = line_start && message.contains("the end of the item");
+    if new_item {
+        words.extend(crate::parser::ITEM_KEYWORDS);
+    }
+    let best = crate::diagnostics::did_you_mean(found, words)?;
+    let message = if new_item {
+        format!("`{found}` is not the start of an item")
+    } else {
+        format!("unexpected `{found}` in this `{item}`")
+    };
+    Some((Some(message), format!("did you mean `{best}`?")))
+}
+
+/// Help for an unknown keyboard key (E0207): the key it is a slip or another name for.
+pub fn key_help(name: &str) -> String {
+    let lower = name.to_ascii_lowercase();
+    let alias = KEY_ALIASES.iter().find(|(a, _)| *a == lower).map(|(_, k)| k.to_string());
+    match alias.or_else(|| {
+        crate::diagnostics::did_you_mean(&lower, crate::builtins::NAMED_KEYS.iter().copied())
+    }) {
+        Some(k) => format!("did you mean `{k}`?"),
+        None => {
+            "keys are letters, digits, F1…F12 or a name such as `space`, `enter`, `escape`, `up`"
+                .into()
+        }
+    }
+}
+
+/// How a range is written, for a range given as `0 to 40`, `0 - 40` or `0 40`; `name` is the
+/// parameter's, or empty.
+pub fn range_help(name: &str, min: &str, max: &str) -> String {
+    let name = if name.is_empty() { String::new() } else { format!("{name} ") };
+    format!("a range is written `{name}{min} .. {max}` (MIN `..` MAX)")
+}
+
+fn is_word(w: &str) -> bool {
+    w.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
+        && w.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
 /// Help for text outside any item (E0102).
 pub fn stray(word: &str) -> Option<String> {
     if word.starts_with(|c: char| c.is_ascii_uppercase()) {
@@ -130,7 +229,8 @@ pub fn stray(word: &str) -> Option<String> {
         "function" | "fn" | "def" => {
             Some("reusable drawing is a `component`; values are `let`s".into())
         }
-        _ => None,
+        _ => crate::diagnostics::did_you_mean(word, crate::parser::ITEM_KEYWORDS.iter().copied())
+            .map(|k| format!("did you mean `{k}`?")),
     }
 }
 

@@ -199,18 +199,30 @@ impl Resolver<'_, '_> {
                 arg_scope = arg_scope.with(p, None);
             }
         }
-        for a in &w.args {
+        for (i, a) in w.args.iter().enumerate() {
             if let Some((params, _)) = &signature
                 && a.name.name != "visible"
                 && !params.iter().any(|(p, _)| *p == a.name.name)
             {
-                self.diags
-                    .error(
-                        codes::UNKNOWN_PARAM,
-                        a.name.span,
-                        format!("`{}` has no parameter `{}`", w.component.name, a.name.name),
-                    )
-                    .suggest(&a.name.name, params.iter().map(|(p, _)| p.as_str()));
+                let d = self.diags.error(
+                    codes::UNKNOWN_PARAM,
+                    a.name.span,
+                    format!("`{}` has no parameter `{}`", w.component.name, a.name.name),
+                );
+                match i.checked_sub(1).map(|p| &w.args[p]) {
+                    // `range 0 to 40`: the `to` reads as a parameter.
+                    Some(prev) if a.name.name == "to" => {
+                        let number = |e: &Expr| match e.kind {
+                            ExprKind::Number { value, .. } => value.to_string(),
+                            _ => "MIN".into(),
+                        };
+                        let (min, max) = (number(&prev.value), number(&a.value));
+                        d.help(crate::syntax_hints::range_help(&prev.name.name, &min, &max));
+                    }
+                    _ => {
+                        d.suggest(&a.name.name, params.iter().map(|(p, _)| p.as_str()));
+                    }
+                }
             }
             self.expr(&a.value, &arg_scope);
         }
@@ -308,7 +320,7 @@ impl Resolver<'_, '_> {
                             format!("there is no {} {kind} `{}`", b.device.name, bnd.input.name),
                         );
                         if *kind == "key" {
-                            d.help("keys are letters, digits, F1…F12 or a name such as `space`, `enter`, `escape`, `up`");
+                            d.help(crate::syntax_hints::key_help(&bnd.input.name));
                         } else {
                             d.suggest(&bnd.input.name, names.iter().copied());
                         }
@@ -332,13 +344,16 @@ impl Resolver<'_, '_> {
             names.contains(&input.name.as_str())
         };
         if !ok {
-            self.diags
-                .error(
-                    codes::UNKNOWN_INPUT,
-                    input.span,
-                    format!("there is no {device} {kind} `{}`", input.name),
-                )
-                .suggest(&input.name, names.iter().copied());
+            let d = self.diags.error(
+                codes::UNKNOWN_INPUT,
+                input.span,
+                format!("there is no {device} {kind} `{}`", input.name),
+            );
+            if kind == "key" {
+                d.help(crate::syntax_hints::key_help(&input.name));
+            } else {
+                d.suggest(&input.name, names.iter().copied());
+            }
         }
     }
 
