@@ -1,5 +1,8 @@
 //! MAVLink ingest: messages decoded *and published* into the DataServer per second, against
-//! the `mavlink` crate's decoding alone, on the same datagrams in the same run.
+//! the `mavlink` crate's decoding alone, on the same datagrams in the same run; and the
+//! figures of a spoofed flood (10,713 system ids, as in issue #15): vehicles held, memory
+//! grown and heartbeats sent back per second, with the old behaviour (no bound, every sender
+//! answered) against the defaults.
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use mavlink::MavHeader;
@@ -74,7 +77,61 @@ fn datagrams(vehicles: u8) -> Vec<Vec<u8>> {
     out
 }
 
+/// Resident memory in KiB (Linux), for the flood figures.
+fn rss_kib() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4)
+}
+
+/// One spoofed flood: a heartbeat from each of `ids` 32-bit system ids (three each, so they
+/// would prove themselves), then one watchdog period with our heartbeats.
+fn flood(label: &str, cfg: LinkConfig, ids: u32) {
+    let ds = DataServer::default();
+    let ours = std::sync::Arc::new(std::net::UdpSocket::bind("127.0.0.1:0").unwrap());
+    // Replies go to a loopback port nobody listens on.
+    let spoofed: std::net::SocketAddr = "127.0.0.1:9".parse().unwrap();
+    let link = Link::new(ModuleContext::detached("mavlink", ds.clone()), cfg, Some(ours)).unwrap();
+    let before = rss_kib();
+    let t0 = std::time::Instant::now();
+    for seq in 0..3u8 {
+        for sys in 1000..1000 + ids {
+            let h = MavHeader { system_id: sys, component_id: 1, sequence: seq };
+            let hb = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
+                custom_mode: 0,
+                mavtype: MavType::MAV_TYPE_QUADROTOR,
+                autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
+                base_mode: MavModeFlag::empty(),
+                system_status: MavState::MAV_STATE_ACTIVE,
+                mavlink_version: 3,
+            });
+            link.ingest(&encode_v2(h, &hb), Some(spoofed));
+        }
+    }
+    let secs = t0.elapsed().as_secs_f64();
+    link.watchdog(true);
+    ds.quiesce();
+    let grown = match (before, rss_kib()) {
+        (Some(a), Some(b)) => format!("{:.1} MiB", b.saturating_sub(a) as f64 / 1024.0),
+        _ => "n/a".into(),
+    };
+    let sent = link.counters().sent.load(std::sync::atomic::Ordering::Relaxed);
+    println!(
+        "mavlink flood ({label}): {ids} spoofed ids x3 heartbeats in {secs:.2} s -> {} vehicles, memory +{grown}, {sent} heartbeats sent back per second",
+        link.vehicles()
+    );
+}
+
 fn bench(c: &mut Criterion) {
+    // The bounded defaults first (memory is measured as growth; freed memory is not returned).
+    flood("defaults: max_vehicles 32, proof_heartbeats 3", LinkConfig::default(), 10_713);
+    let unbounded = LinkConfig {
+        max_vehicles: 65_535,
+        proof_heartbeats: 1,
+        max_send_rate: 100_000,
+        ..LinkConfig::default()
+    };
+    flood("old behaviour: unbounded, every sender answered", unbounded, 10_713);
     let grams = datagrams(4);
     let n = grams.len() as u64;
     let mut group = c.benchmark_group("mavlink");
