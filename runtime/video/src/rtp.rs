@@ -111,8 +111,8 @@ const START: [u8; 4] = [0, 0, 0, 1];
 ///
 /// A unit ends at the marker bit, or when the timestamp changes. A lost packet throws away
 /// the unit it belonged to (counted in `dropped_units`); the decoder conceals the rest. No
-/// unit is emitted before the first one that carries a sequence parameter set (a decoder
-/// can do nothing without it).
+/// unit is emitted before the first whole one that carries a sequence parameter set (a
+/// decoder can do nothing without it).
 #[derive(Debug, Default)]
 pub struct H264Depacketizer {
     seq: SeqTracker,
@@ -121,7 +121,10 @@ pub struct H264Depacketizer {
     key: bool,
     broken: bool,
     in_fu: bool,
+    /// A unit with a sequence parameter set was emitted (the decoder can start).
     seen_sps: bool,
+    /// The unit in progress carries one.
+    has_sps: bool,
     oversize: bool,
     /// Size of the current FU-A's first fragment.
     fu_size: usize,
@@ -179,7 +182,7 @@ impl H264Depacketizer {
         }
         let t = nal[0] & 0x1f;
         self.key |= t == 5 || t == 7;
-        self.seen_sps |= t == 7;
+        self.has_sps |= t == 7;
         self.au.extend_from_slice(&START);
         self.au.extend_from_slice(nal);
         self.bound();
@@ -266,6 +269,7 @@ impl H264Depacketizer {
     fn flush(&mut self, emit: &mut dyn FnMut(Unit)) {
         let au = std::mem::take(&mut self.au);
         let (broken, key) = (self.broken || self.in_fu, self.key);
+        let has_sps = std::mem::take(&mut self.has_sps);
         let oversize = std::mem::take(&mut self.oversize);
         self.broken = false;
         self.key = false;
@@ -276,6 +280,9 @@ impl H264Depacketizer {
         }
         self.stats.units += 1;
         self.stats.oversize += oversize as u64;
+        if !broken && !au.is_empty() {
+            self.seen_sps |= has_sps;
+        }
         if broken || au.is_empty() || !self.seen_sps {
             self.stats.dropped_units += 1;
         } else {
@@ -482,6 +489,21 @@ mod tests {
         assert!(starts_access_unit(&[0x7c, 0x85, 0x88]));
         assert!(!starts_access_unit(&[0x7c, 0x05, 0x88]), "a middle fragment");
         assert!(!starts_access_unit(&[]));
+    }
+
+    #[test]
+    fn a_broken_unit_with_the_sps_does_not_start_the_stream() {
+        let packets = vec![
+            pkt(1, 100, false, &stap(&[SPS, PPS])),
+            // seq 2 lost: the IDR's slice
+            pkt(3, 200, true, &[0x41, 0x80]), // a P slice: nothing to decode it from
+            pkt(4, 300, true, &stap(&[SPS, PPS])),
+            pkt(5, 400, true, &[0x41, 0x80]),
+        ];
+        let (units, stats) = run(&packets);
+        let ts: Vec<u32> = units.iter().map(|u| u.timestamp).collect();
+        assert_eq!(ts, vec![300, 400]);
+        assert_eq!(stats.dropped_units, 2);
     }
 
     #[test]

@@ -49,9 +49,10 @@ pub struct Impairment {
     /// Probability that a datagram is cut to a random shorter length (at least 12 bytes).
     pub truncate: f64,
     pub seed: u64,
-    /// Datagrams passed untouched first: the stream's first key frame (a receiver shows
-    /// nothing before a sequence parameter set, whatever the link).
-    pub clean_first: u64,
+    /// Pass the first frame (up to its RTP marker bit) untouched: the stream's first key
+    /// frame (a receiver shows nothing before a whole sequence parameter set and IDR,
+    /// whatever the link).
+    pub clean_first_frame: bool,
 }
 
 /// What went through.
@@ -120,6 +121,7 @@ fn run(
     // Held-back datagrams with how many others must pass first.
     let mut held: Vec<(usize, Vec<u8>)> = Vec::new();
     let (mut sent_ts, mut reached_ts) = (HashSet::new(), HashSet::new());
+    let mut first_frame_done = false;
     let ts = |d: &[u8]| (d.len() >= 12).then(|| u32::from_be_bytes([d[4], d[5], d[6], d[7]]));
     while !stop.load(Ordering::SeqCst) {
         let Ok((n, _)) = sock.recv_from(&mut buf) else { continue };
@@ -131,8 +133,12 @@ fn run(
         let (lose, delay, cut) =
             (rng.chance(imp.loss), rng.chance(imp.reorder), rng.chance(imp.truncate));
         let (k, len) = (1 + rng.below(3), 12 + rng.below(d.len().saturating_sub(12).max(1)));
-        let (lose, delay, cut) =
-            if c.datagrams <= imp.clean_first { (false, false, false) } else { (lose, delay, cut) };
+        let (lose, delay, cut) = if imp.clean_first_frame && !first_frame_done {
+            first_frame_done = d.get(1).is_some_and(|b| b & 0x80 != 0);
+            (false, false, false)
+        } else {
+            (lose, delay, cut)
+        };
         if lose {
             c.lost += 1;
             continue;
