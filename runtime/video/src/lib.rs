@@ -25,8 +25,12 @@
 //!   `[data: bytes, codec: string ("h264" | "jpeg"), unit: int, arrival_us: int]`:
 //!   one H.264 access unit (Annex B) or one complete JPEG file per message.
 //! - Statistics are properties of the camera object: `width`, `height`, `frames`, `fps`,
-//!   `dropped`, `latency_ms` (arrival → decoded), `codec`, and from the painter
-//!   `shown_fps`, `shown_latency_ms` (arrival → painted).
+//!   `sent`, `dropped`, `decode_errors`, `refused`, `ignored`, `restarts`, …,
+//!   `latency_ms` (arrival → decoded), `codec`, and from the painter `shown_fps`,
+//!   `shown_latency_ms` (arrival → painted). They add up: `sent = frames + dropped +
+//!   decode_errors` (`docs/video.md` lists every counter).
+//! - Frames are bounded per camera ([`Limits`]): the size a frame declares is checked
+//!   before it is decoded.
 //!
 //! Architecture invariant: the receiver, the codecs and the painter talk only through the
 //! DataServer (listener objects and properties); none holds a handle on another.
