@@ -162,10 +162,11 @@ impl Compositor for SoftPresenter {
 
 /// What a window buffer needs redrawn, given its age (frames since it was last shown; 0:
 /// new), the damage composited since the last present and that of the presents before.
-/// `None`: all of it.
+/// `None`: all of it — also when nothing was composited since: a present without a new
+/// frame is the window asking to be shown again (exposed), whatever its buffer holds.
 fn stale_part(full: bool, pending: IRect, history: &[IRect], age: u8) -> Option<IRect> {
     let age = age as usize;
-    if full || age == 0 || age > history.len() + 1 {
+    if full || pending.is_empty() || age == 0 || age > history.len() + 1 {
         return None;
     }
     Some(history.iter().take(age - 1).fold(pending, |a, r| a.union(r)))
@@ -227,6 +228,7 @@ mod tests {
         assert_eq!(stale_part(false, r(0), &history, 5), None);
         assert_eq!(stale_part(false, r(0), &history, 0), None);
         assert_eq!(stale_part(true, r(0), &history, 1), None);
+        assert_eq!(stale_part(false, IRect::default(), &history, 1), None, "exposed");
     }
 
     #[test]
