@@ -12,6 +12,9 @@
 //! - [`bundle::write`] / [`bundle::read`].
 #![forbid(unsafe_code)]
 
+// The code pest_derive generates without its `std` feature names `::alloc`.
+extern crate alloc;
+
 pub mod ast;
 pub mod builtins;
 pub mod bundle;

@@ -277,6 +277,8 @@ fn checker_refuses_deep_nesting_without_overflowing_the_stack() {
         format!("let x = {}1{}", "[".repeat(100_000), "]".repeat(100_000)),
         format!("window w {{ layer {}", "{".repeat(100_000)),
         format!("let x = {}", "/*".repeat(10_000)),
+        format!("let x = {}1{}", "if true then ".repeat(20_000), " else 0".repeat(20_000)),
+        format!("let x = {}1", "if a then 1 else ".repeat(20_000)),
     ] {
         check(&text);
     }

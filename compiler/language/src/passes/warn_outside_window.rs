@@ -21,8 +21,14 @@ fn length(b: &Bound, full: f64) -> Option<f64> {
 }
 
 fn check(windows: &[Window], widgets: &[Widget], screen: (f64, f64), diags: &mut Diagnostics) {
+    // By name, the first of each (as a search would find): searching the list for every
+    // widget made 100,000-line layouts quadratic.
+    let mut by_name: std::collections::HashMap<&str, &Window> = Default::default();
+    for x in windows {
+        by_name.entry(x.name.as_str()).or_insert(x);
+    }
     for w in widgets {
-        let Some(win) = windows.iter().find(|x| x.name == w.window) else { continue };
+        let Some(win) = by_name.get(w.window.as_str()).copied() else { continue };
         let (Some(ww), Some(wh)) = (
             win.rect.get(2).and_then(|b| length(b, screen.0)),
             win.rect.get(3).and_then(|b| length(b, screen.1)),
