@@ -46,6 +46,8 @@ pub(crate) struct Inner {
     pub(crate) state: Mutex<State>,
     /// Set when the reloader goes: a check that ends after it swaps nothing in.
     pub(crate) stopping: AtomicBool,
+    /// One check at a time (`limits.rs`).
+    checking: crate::limits::Token,
 }
 
 pub(crate) struct State {
@@ -107,6 +109,7 @@ impl Reloader {
                 limits: ReloadLimits::default(),
             }),
             stopping: AtomicBool::new(false),
+            checking: crate::limits::token(),
         });
         banner::start(ds, inner.options.config.screen);
         publish_reload_method(&inner);
@@ -255,7 +258,8 @@ impl Inner {
 
     fn check_and_swap(self: &Arc<Self>) -> Outcome {
         let limits = self.state.lock().limits;
-        let (sources, mut diags, bundle) = match check_bounded(&self.target, limits) {
+        let (sources, mut diags, bundle) = match check_bounded(&self.target, limits, &self.checking)
+        {
             Ok(checked) => checked,
             Err(why) => return Outcome::Failed(why),
         };
