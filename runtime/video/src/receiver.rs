@@ -287,3 +287,42 @@ fn receive(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec() -> ModuleSpec {
+        ModuleSpec::new("video").named("v")
+    }
+
+    #[test]
+    fn stream_choice_and_limits_come_from_the_module_settings() {
+        let s = spec()
+            .with("source", "10.0.0.5:5600")
+            .with("ssrc", 77)
+            .with("silence_ms", 500)
+            .with("reorder", 4)
+            .with("max_width", 1920)
+            .with("max_height", 1080)
+            .with("max_unit_kb", 1024);
+        let s = ReceiverConfig::from_spec(&s).unwrap().stream;
+        assert_eq!(s.source, SourceFilter::Addr("10.0.0.5:5600".parse().unwrap()));
+        assert_eq!((s.ssrc, s.silence, s.reorder), (Some(77), Duration::from_millis(500), 4));
+        assert_eq!(s.limits, Limits { max_width: 1920, max_height: 1080, max_unit_bytes: 1 << 20 });
+        assert_eq!(ReceiverConfig::from_spec(&spec()).unwrap().stream, StreamConfig::default());
+    }
+
+    #[test]
+    fn bad_stream_settings_are_refused_with_their_name() {
+        for (k, s) in [
+            ("source", spec().with("source", "somewhere")),
+            ("ssrc", spec().with("ssrc", -5)),
+            ("max_width", spec().with("max_width", 100_000)),
+            ("silence_ms", spec().with("silence_ms", 0)),
+        ] {
+            let e = ReceiverConfig::from_spec(&s).unwrap_err();
+            assert!(e.contains(k), "{e}");
+        }
+    }
+}
