@@ -29,6 +29,8 @@ mod native;
 mod paint;
 mod pointer;
 
+pub use native::draw_native;
+
 /// Settings of the renderer.
 #[derive(Clone, Debug)]
 pub struct RendererConfig {

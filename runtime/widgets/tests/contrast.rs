@@ -339,6 +339,78 @@ fn draw_alert_layer() -> Vec<Run> {
     probe.runs
 }
 
+/// The widgets Rust draws: a vehicle list (healthy, weak link and low fuel, link lost, no
+/// link data), one that matches no vehicle, a context menu with a disabled and a hovered
+/// item, and a video placeholder.
+fn draw_native_widgets() -> Vec<Run> {
+    let ds = DataServer::new(Config { workers: 1 });
+    let vehicles =
+        ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).expect("folder");
+    let values: [(&str, Option<f64>, Option<f64>, bool); 4] = [
+        ("usv1", Some(0.9), Some(0.7), false),
+        ("usv2", Some(0.2), Some(0.15), false),
+        ("usv3", None, Some(0.5), true),
+        ("usv4", None, None, false),
+    ];
+    for (name, link, fuel, lost) in values {
+        let v = ds.create_object(vehicles, ObjectInfo::new(name, "usv")).expect("vehicle");
+        if let Some(l) = link {
+            ds.set(v, "link", Value::Float(l)).expect("set");
+        }
+        if let Some(f) = fuel {
+            ds.set(v, "fuel", Value::Float(f)).expect("set");
+        }
+        ds.set(v, "link_lost", Value::Bool(lost)).expect("set");
+    }
+    ds.quiesce();
+    let props = |pairs: &[(&str, Value)]| -> HashMap<String, Value> {
+        pairs.iter().map(|(k, v)| (k.to_string(), v.clone())).collect()
+    };
+    let menu = props(&[
+        ("title", Value::from("USV1")),
+        ("items", Value::Int(3)),
+        ("item0", Value::from("Arm")),
+        ("enabled0", Value::Bool(true)),
+        ("item1", Value::from("Disarm")),
+        ("enabled1", Value::Bool(false)),
+        ("item2", Value::from("Stop")),
+        ("enabled2", Value::Bool(true)),
+        ("hover_row", Value::Int(0)),
+    ]);
+    let widgets = [
+        ("vehicle_list", "VehicleList", props(&[]), Rect::new(10.0, 10.0, 440.0, 140.0)),
+        ("vehicle_list_narrow", "VehicleList", props(&[]), Rect::new(10.0, 170.0, 300.0, 140.0)),
+        (
+            "vehicle_list_none",
+            "VehicleList",
+            props(&[("filter", Value::from("ugv"))]),
+            Rect::new(10.0, 330.0, 300.0, 60.0),
+        ),
+        ("context_menu", "ContextMenu", menu, Rect::new(500.0, 10.0, 180.0, 110.0)),
+        (
+            "video",
+            "Video",
+            props(&[("source", Value::from("cam1"))]),
+            Rect::new(500.0, 170.0, 320.0, 180.0),
+        ),
+    ];
+    let mut probe = Probe::new();
+    for (name, component, props, b) in widgets {
+        probe.widget = name.into();
+        probe.save();
+        probe.translate(b.x, b.y);
+        mocu_widgets::renderer::draw_native(
+            &mut probe,
+            &ds,
+            component,
+            &props,
+            Some(Rect::new(0.0, 0.0, b.w, b.h)),
+        );
+        probe.restore();
+    }
+    probe.runs
+}
+
 fn report(runs: &[Run]) {
     if std::env::var("CONTRAST_REPORT").is_ok_and(|v| v == "1") {
         for r in runs {
@@ -448,6 +520,16 @@ fn check_all(runs: &[Run]) {
         assert!(readable(r), "{} {:?}: {:.2}:1", r.widget, r.text, r.ratio);
         assert!(r.size >= MIN_SIZE, "{} {:?}: {} px", r.widget, r.text, r.size);
     }
+}
+
+#[test]
+fn the_vehicle_list_context_menu_and_video_placeholder_draw_readable_text() {
+    let runs = read(&draw_native_widgets());
+    report(&runs);
+    for text in ["VEHICLES", "usv2", "LNK", "FUEL", "— no vehicles —", "Disarm", "USV1"] {
+        assert!(runs.iter().any(|r| r.text == text), "{text} is measured: {runs:?}");
+    }
+    check_all(&runs);
 }
 
 #[test]

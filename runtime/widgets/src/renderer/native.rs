@@ -7,8 +7,9 @@ use mocu_value::{Guid, PropName, Value};
 use std::collections::HashMap;
 
 /// Widgets drawn by Rust: the vehicle list, a video placeholder (the video module claims
-/// video windows); unknown components draw a labelled frame, never nothing.
-pub(super) fn draw_native(
+/// video windows); unknown components draw a labelled frame, never nothing. Public for
+/// tests/contrast.rs, which measures the text they draw.
+pub fn draw_native(
     c: &mut dyn Canvas,
     ds: &DataServer,
     component: &str,
@@ -58,7 +59,7 @@ mod theme {
     pub const GOOD: Color = Color::rgb(0x22, 0xc5, 0x5e);
     pub const CAUTION: Color = Color::rgb(0xf5, 0x9e, 0x0b);
     pub const ALARM: Color = Color::rgb(0xef, 0x44, 0x44);
-    pub const NODATA: Color = Color::rgb(0x5b, 0x64, 0x70);
+    pub const NODATA: Color = Color::rgb(0x7d, 0x87, 0x94);
 }
 
 /// Where a vehicle list's rows start, and their height.
@@ -93,7 +94,7 @@ fn context_menu(c: &mut dyn Canvas, props: &HashMap<String, Value>, b: Rect) {
         &Stroke::new(1.5),
         theme::ACCENT,
     );
-    let head = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle).bold();
+    let head = TextStyle::new(12.0, theme::DIM).baseline(Baseline::Middle).bold();
     c.draw_text(&s("title"), Point::new(10.0, crate::menu::TITLE / 2.0), &head);
     c.line(
         Point::new(6.0, crate::menu::TITLE - 1.0),
@@ -171,7 +172,7 @@ fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Re
         }
         let mut x = first;
         for (label, value, warn, alarm) in [("LNK", link, 0.3, 0.1), ("FUEL", fuel, 0.2, 0.1)] {
-            let small = TextStyle::new(11.0, theme::DIM).baseline(Baseline::Middle);
+            let small = TextStyle::new(12.0, theme::DIM).baseline(Baseline::Middle);
             c.draw_text(label, Point::new(x, y), &small);
             let bx = x + 32.0;
             let track = Rect::new(bx, y - 4.0, bar_w, 8.0);
