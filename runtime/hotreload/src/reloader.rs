@@ -59,6 +59,10 @@ pub(crate) struct State {
     limits: ReloadLimits,
 }
 
+/// How long dropping a reloader waits for a swap in progress before leaving the layout to the
+/// thread doing it.
+const SWAP_WAIT: std::time::Duration = std::time::Duration::from_millis(200);
+
 /// The layout to run from a bundle: by name, else the first.
 pub fn choose(bundle: &mocu_language::Bundle, name: Option<&str>) -> Option<usize> {
     let layouts = &bundle.layouts;
@@ -152,12 +156,14 @@ impl Reloader {
 impl Drop for Reloader {
     fn drop(&mut self) {
         self.inner.stopping.store(true, Ordering::SeqCst);
-        let (layout, watcher) = {
-            let mut st = self.inner.state.lock();
-            (st.layout.take(), st.watcher.take())
-        };
-        drop(watcher);
-        drop(layout);
+        // A swap in progress (compiling a new layout under the lock) is not waited for: the
+        // thread doing it drops the layout and the watcher when it ends (`check_and_swap`).
+        let taken = self
+            .inner
+            .state
+            .try_lock_for(SWAP_WAIT)
+            .map(|mut st| (st.layout.take(), st.watcher.take()));
+        drop(taken);
         let _ = self.inner.ds.unpublish_method(Guid::ROOT, "reload");
         if let Some(op) = self.inner.ds.resolve(&["operator"]) {
             let _ = self.inner.ds.unpublish_method(op, "reload");
@@ -307,6 +313,13 @@ impl Inner {
         match layout.reload(program) {
             Ok(stats) => {
                 st.files = files;
+                if self.stopping.load(Ordering::SeqCst) {
+                    // The reloader went during the swap: its layout ends here.
+                    let left = (st.layout.take(), st.watcher.take());
+                    drop(st);
+                    drop(left);
+                    return Outcome::Failed("stopped".into());
+                }
                 drop(st);
                 if let Some(f) = &self.options.on_components {
                     f(program);
