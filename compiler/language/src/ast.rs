@@ -25,6 +25,15 @@ pub enum Item {
     Menu(Menu),
     Watch(Watch),
     Each(Each),
+    Design(Design),
+}
+
+/// `design 1280 x 720`: the screen size the layout's px are written for.
+#[derive(Clone, Debug)]
+pub struct Design {
+    pub width: Expr,
+    pub height: Expr,
+    pub span: Span,
 }
 
 /// `use "path.mocu"` or `use "path.mocu" as ns`.
@@ -49,6 +58,8 @@ pub struct Let {
 pub struct Window {
     pub name: Ident,
     pub rect: Option<Vec<Expr>>,
+    /// `anchor bottom-right` (checked in passes/check_anchors.rs).
+    pub anchor: Option<Ident>,
     pub props: Vec<Prop>,
     pub span: Span,
 }
@@ -75,6 +86,7 @@ pub struct Widget {
     pub name: Option<Ident>,
     pub component: Ident,
     pub at: Option<(Vec<Expr>, Span)>,
+    pub anchor: Option<Ident>,
     pub args: Vec<Prop>,
     pub handlers: Vec<Handler>,
     pub span: Span,

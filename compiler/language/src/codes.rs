@@ -21,6 +21,8 @@ pub const MISSING_ARG: &str = "E0209";
 pub const BAD_PROFILE: &str = "E0210";
 pub const BAD_BINDING: &str = "E0211";
 pub const UNKNOWN_MODE: &str = "E0212";
+pub const UNKNOWN_ANCHOR: &str = "E0213";
+pub const BAD_DESIGN: &str = "E0214";
 
 pub const NOT_A_NUMBER: &str = "E0301";
 pub const TYPE_MISMATCH: &str = "E0302";
@@ -43,6 +45,7 @@ pub const UNUSED_LET: &str = "W0001";
 pub const OUTSIDE_WINDOW: &str = "W0002";
 pub const CONSTANT_WATCH: &str = "W0003";
 pub const ABSURD_DURATION: &str = "W0004";
+pub const SCREEN_PX_IN_DESIGN: &str = "W0005";
 
 /// Every code with a one-line description (SARIF rule text, docs check).
 pub const ALL: &[(&str, &str)] = &[
@@ -65,6 +68,8 @@ pub const ALL: &[(&str, &str)] = &[
     (BAD_PROFILE, "invalid profile"),
     (BAD_BINDING, "binding option that does not fit its input, or `shift` without a shift input"),
     (UNKNOWN_MODE, "`mode` action naming no declared mode"),
+    (UNKNOWN_ANCHOR, "unknown anchor name"),
+    (BAD_DESIGN, "`design` outside the layout file, twice, or not a positive px size"),
     (NOT_A_NUMBER, "a non-number used as a number"),
     (TYPE_MISMATCH, "type mismatch"),
     (ARG_COUNT, "wrong number of arguments"),
@@ -84,6 +89,7 @@ pub const ALL: &[(&str, &str)] = &[
     (OUTSIDE_WINDOW, "widget wholly outside its window"),
     (CONSTANT_WATCH, "watch condition is constant"),
     (ABSURD_DURATION, "duration longer than a day"),
+    (SCREEN_PX_IN_DESIGN, "position reads the screen's size in a layout with `design`"),
 ];
 
 pub fn describe(code: &str) -> &'static str {

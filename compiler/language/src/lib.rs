@@ -26,6 +26,7 @@ pub mod lexer;
 pub mod modules;
 pub mod parser;
 pub mod passes;
+pub mod placement;
 pub mod profile;
 pub mod program;
 pub mod project;
@@ -84,7 +85,8 @@ pub fn compile_layout(
     //    can treat them as `{error}` silently.
     let used = resolve_names::resolve_names(&modules, &defs, diags);
     // 4. Type and lower to the program; needs resolution and the schema's path types.
-    let program = check_types::check_types(&modules, &defs, schema, diags);
+    let mut program = check_types::check_types(&modules, &defs, schema, diags);
+    program.design = check_anchors::check_anchors(&modules, diags);
     // 5. Schema rules need complete, typed paths (after lets are inlined).
     check_schema::check_schema(&program, schema, diags);
     check_method_args::check_method_args(&program, schema, diags);
@@ -92,6 +94,7 @@ pub fn compile_layout(
     // 6. Warnings last: they only make sense on a program that resolved and typed.
     warn_unused::warn_unused(&modules, &used, diags);
     warn_outside_window::warn_outside_window(&program, config.screen, diags);
+    check_anchors::warn_screen_px(&program, diags);
     warn_constant_watch::warn_constant_watch(&program, diags);
     program
 }

@@ -21,6 +21,9 @@ pub struct Program {
     pub menus: Vec<Menu>,
     pub watches: Vec<Watch>,
     pub templates: Vec<Template>,
+    /// `design W x H` in the layout file (see [`crate::placement`]).
+    #[serde(default)]
+    pub design: Option<crate::placement::Design>,
 }
 
 /// An expression bound to the world model: its typed tree and the paths it reads.
@@ -157,6 +160,9 @@ pub struct Window {
     pub layer: Bound,
     /// x, y, width, height; numbers in px, or with unit "%" of the screen.
     pub rect: Vec<Bound>,
+    /// The screen's point `rect` is measured from (see [`crate::placement`]).
+    #[serde(default)]
+    pub anchor: crate::placement::Anchor,
     pub opacity: Bound,
     pub visible: Bound,
     pub source: Option<Bound>,
@@ -172,6 +178,9 @@ pub struct Widget {
     pub native: bool,
     /// x, y and optionally width, height in the window's px.
     pub at: Vec<Bound>,
+    /// The window's point `at` is measured from (see [`crate::placement`]).
+    #[serde(default)]
+    pub anchor: crate::placement::Anchor,
     /// Every parameter of the component, defaults filled in.
     pub args: Vec<Arg>,
     pub visible: Option<Bound>,

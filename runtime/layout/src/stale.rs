@@ -15,6 +15,7 @@ use mocu_dataserver::DataServer;
 use mocu_jit as jit;
 use mocu_lower::{Base, Lowerer, Source};
 use mocu_value::{Guid, Value};
+use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -63,10 +64,10 @@ pub(crate) fn widget_stale(lw: &mut Lowerer) -> Option<jit::Expr> {
     out
 }
 
-/// Age: a widget whose vehicle declares `stale_after` (seconds: how often it writes its
-/// telemetry at the least; the protocol module knows its rate) is also stale — property
-/// `aged` — while one of the numbers or flags it reads from that vehicle has received no
-/// write (an unchanged one counts: `DataServer::received_at`) for that long. One delayed
+/// Age: a widget is also stale — property `aged` — while one of the numbers or flags it
+/// reads from a vehicle has received no write (an unchanged one counts:
+/// `DataServer::received_at`) for that input's period ([`period`]: the schema's
+/// `stale_after`, the vehicle's, or three periods of the rate its module declared). One delayed
 /// call per widget on the server's clock, armed when the widget's data first arrives and
 /// re-armed for the next deadline; once aged, no timer runs: the next changed value makes it
 /// fresh (an unchanged write after aging is not seen until then — nothing polls).
@@ -141,9 +142,44 @@ fn objects_of(
     }
 }
 
-fn period(ds: &DataServer, vehicle: Guid) -> Option<Duration> {
-    let s = ds.try_get(vehicle, "stale_after".into())?.as_f64()?;
+/// A value whose publisher declares a rate (`PropMeta::rate_hz`) and whose schema gives no
+/// `stale_after` is stale after this many periods without a write.
+pub const RATE_PERIODS: f64 = 3.0;
+
+fn seconds(s: f64) -> Option<Duration> {
     (s.is_finite() && s > 0.0).then(|| Duration::from_secs_f64(s))
+}
+
+/// How long an input stays fresh, first found of: the schema's `stale_after` for the
+/// property (by its object's type), the vehicle's own `stale_after`, and
+/// [`RATE_PERIODS`] periods of the rate its publisher declared. `None`: it never ages.
+fn period(sh: &Shared, vehicle: Guid, obj: Guid, property: &str) -> Option<Duration> {
+    let ds = &sh.ds;
+    if !sh.config.stale_after.is_empty()
+        && let Ok(info) = ds.info(obj)
+        && let Some(d) = sh.config.stale_after.get(&(info.kind.to_string(), property.to_string()))
+    {
+        return Some(*d);
+    }
+    if let Some(d) = ds.try_get(vehicle, "stale_after".into()).and_then(|v| v.as_f64()) {
+        return seconds(d);
+    }
+    seconds(RATE_PERIODS / ds.meta(obj, property).ok()?.rate_hz?)
+}
+
+impl crate::LayoutConfig {
+    /// The `stale_after` of every schema property that has one, by (object type, property).
+    pub fn stale_after_from(schema: &mocu_language::Schema) -> HashMap<(String, String), Duration> {
+        let mut out = HashMap::new();
+        for (ty, t) in &schema.types {
+            for (name, p) in &t.properties {
+                if let Some(d) = p.stale_after.and_then(seconds) {
+                    out.insert((ty.clone(), name.clone()), d);
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Compares each input's last write with its vehicle's period; writes `aged` when that
@@ -163,7 +199,7 @@ fn check(sh: &Arc<Shared>, g: Guid) {
     let (mut old, mut next): (bool, Option<Duration>) = (false, None);
     for (base, objects, property) in &inputs {
         let Some((vehicle, obj)) = objects_of(ds, base, objects, instance) else { continue };
-        let Some(p) = period(ds, vehicle) else { continue };
+        let Some(p) = period(sh, vehicle, obj, property) else { continue };
         let Some(at) = ds.received_at(obj, property.as_str()).ok().flatten() else { continue };
         let age = now.saturating_duration_since(at);
         // An input that aged needs no more timers (nothing polls): its next changed value

@@ -113,3 +113,61 @@ fn data_that_stops_arriving_ages_after_its_vehicles_declared_period_and_unchange
     assert_eq!(aged(&ds), Some(Value::Bool(true)), "and aged again after the period");
     assert_eq!(stale(&ds, &speed), Some(Value::Bool(false)), "the link was never lost");
 }
+
+/// A number whose publisher declares its rate (`PropMeta::rate_hz`) ages after three of its
+/// periods without a write, with nothing declared on the vehicle or in the schema.
+#[test]
+fn without_a_stale_after_a_value_ages_after_three_periods_of_its_publishers_rate() {
+    let clock = Arc::new(ManualClock::new());
+    let ds = DataServer::with_clock(Config { workers: 2 }, clock.clone());
+    let (_v1, nav1) = usv(&ds, "usv1");
+    ds.delete_property(nav1, "speed").unwrap();
+    let meta = PropMeta::typed(ValueKind::Float).rate(10.0); // every 0.1 s: stale after 0.3 s
+    ds.create_property(nav1, "speed", Value::Float(0.0), meta).unwrap();
+    let layout = Layout::load(&ds, &program(STRIPS), config(), Arc::new(NullSink)).unwrap();
+    layout.settle();
+    let speed = ["display", "hud", "speed"];
+    let aged = |ds: &DataServer| ds.try_get(ds.resolve(&speed).unwrap(), "aged".into());
+    for _ in 0..5 {
+        clock.advance(Duration::from_millis(250));
+        ds.set(nav1, "speed", Value::Float(0.0)).unwrap();
+        layout.settle();
+        assert_ne!(aged(&ds), Some(Value::Bool(true)), "written every 0.25 s: fresh");
+    }
+    clock.advance(Duration::from_millis(310));
+    layout.settle();
+    assert_eq!(aged(&ds), Some(Value::Bool(true)), "nothing for three periods: aged");
+    // The fuel bars read `fuel`, whose publisher declared no rate: they never age.
+    assert_ne!(
+        ds.try_get(ds.resolve(&["display", "strip@usv1", "fuel@usv1"]).unwrap(), "aged".into()),
+        Some(Value::Bool(true))
+    );
+}
+
+/// The schema's `stale_after` for a property comes before the vehicle's and the rate's.
+#[test]
+fn a_schema_stale_after_wins_over_the_publishers_rate() {
+    let clock = Arc::new(ManualClock::new());
+    let ds = DataServer::with_clock(Config { workers: 2 }, clock.clone());
+    let (v1, nav1) = usv(&ds, "usv1");
+    ds.set(v1, "stale_after", Value::Float(0.2)).unwrap();
+    ds.delete_property(nav1, "speed").unwrap();
+    let meta = PropMeta::typed(ValueKind::Float).rate(10.0);
+    ds.create_property(nav1, "speed", Value::Float(0.0), meta).unwrap();
+    let text = "[types.nav.properties]\nspeed = { type = \"float\", stale_after = 2 }";
+    let mut sources = mocu_language::SourceMap::new();
+    let file = sources.add("schema.toml".into(), text.into());
+    let mut diags = mocu_language::Diagnostics::new();
+    let schema = mocu_language::Schema::parse(file, text, &mut diags).expect("a schema");
+    let config = LayoutConfig { stale_after: LayoutConfig::stale_after_from(&schema), ..config() };
+    let layout = Layout::load(&ds, &program(STRIPS), config, Arc::new(NullSink)).unwrap();
+    layout.settle();
+    let speed = ["display", "hud", "speed"];
+    let aged = |ds: &DataServer| ds.try_get(ds.resolve(&speed).unwrap(), "aged".into());
+    clock.advance(Duration::from_millis(1900));
+    layout.settle();
+    assert_ne!(aged(&ds), Some(Value::Bool(true)), "1.9 s of the schema's 2 s: fresh");
+    clock.advance(Duration::from_millis(200));
+    layout.settle();
+    assert_eq!(aged(&ds), Some(Value::Bool(true)), "2.1 s: aged");
+}

@@ -89,6 +89,11 @@ struct Sink {
     watches: Vec<Watch>,
 }
 
+/// An unknown anchor name is reported by passes/check_anchors.rs; here it is the default.
+fn anchor_of(name: Option<&ast::Ident>) -> crate::placement::Anchor {
+    name.and_then(|n| crate::placement::Anchor::parse(&n.name)).unwrap_or_default()
+}
+
 fn mk(ty: Type, node: Node, span: Span) -> Expr {
     Expr { ty, node, span }
 }
@@ -111,7 +116,7 @@ impl Typer<'_, '_> {
 
     fn item(&mut self, item: &Item, scope: &Scope, sink: &mut Sink) {
         match item {
-            Item::Use(_) | Item::Let(_) => {}
+            Item::Use(_) | Item::Let(_) | Item::Design(_) => {}
             Item::Window(w) => {
                 let win = self.window(w, scope);
                 sink.windows.push(win);
@@ -291,6 +296,7 @@ impl Typer<'_, '_> {
                 Bound::new(mk(Type::number_in(Some("%".into())), Node::Number(100.0), span)),
                 Bound::new(mk(Type::number_in(Some("%".into())), Node::Number(100.0), span)),
             ],
+            anchor: anchor_of(w.anchor.as_ref()),
             opacity: konst(1.0),
             visible: Bound::new(mk(Type::BOOL, Node::Bool(true), span)),
             source: None,
@@ -481,6 +487,7 @@ impl Typer<'_, '_> {
             component: w.component.name.clone(),
             native,
             at,
+            anchor: anchor_of(w.anchor.as_ref()),
             args,
             visible,
             handlers,

@@ -1,6 +1,7 @@
 //! The checks, one file each, run in order by [`crate::compile_layout`]. Every pass takes
 //! `&mut Diagnostics` and reports instead of stopping.
 
+pub mod check_anchors;
 pub mod check_depth;
 pub mod check_durations;
 pub mod check_method_args;

@@ -60,7 +60,7 @@ impl Resolver<'_, '_> {
 
     fn item(&mut self, item: &Item, scope: &Scope, index: Option<usize>) {
         match item {
-            Item::Use(_) => {}
+            Item::Use(_) | Item::Design(_) => {}
             Item::Let(l) => {
                 let s = Scope { limit: index, ..scope.clone() };
                 self.expr(&l.value, &s);

@@ -7,20 +7,28 @@ use crate::diagnostics::Diagnostics;
 use crate::program::*;
 
 pub fn warn_outside_window(program: &Program, screen: (f64, f64), diags: &mut Diagnostics) {
-    check(&program.windows, &program.widgets, screen, diags);
+    let scale = crate::placement::scale(program.design, screen);
+    check(&program.windows, &program.widgets, screen, scale, diags);
     for t in &program.templates {
         let mut windows = t.windows.clone();
         windows.extend(program.windows.iter().cloned());
-        check(&windows, &t.widgets, screen, diags);
+        check(&windows, &t.widgets, screen, scale, diags);
     }
 }
 
-fn length(b: &Bound, full: f64) -> Option<f64> {
+/// A constant length in screen px: design px times the scale, or % of `full`.
+fn length(b: &Bound, full: f64, scale: f64) -> Option<f64> {
     let v = b.expr.constant()?.number()?;
-    Some(if b.expr.ty.unit() == Some("%") { v / 100.0 * full } else { v })
+    Some(if b.expr.ty.unit() == Some("%") { v / 100.0 * full } else { v * scale })
 }
 
-fn check(windows: &[Window], widgets: &[Widget], screen: (f64, f64), diags: &mut Diagnostics) {
+fn check(
+    windows: &[Window],
+    widgets: &[Widget],
+    screen: (f64, f64),
+    scale: f64,
+    diags: &mut Diagnostics,
+) {
     // By name, the first of each (as a search would find): searching the list for every
     // widget made 100,000-line layouts quadratic.
     let mut by_name: std::collections::HashMap<&str, &Window> = Default::default();
@@ -30,14 +38,17 @@ fn check(windows: &[Window], widgets: &[Widget], screen: (f64, f64), diags: &mut
     for w in widgets {
         let Some(win) = by_name.get(w.window.as_str()).copied() else { continue };
         let (Some(ww), Some(wh)) = (
-            win.rect.get(2).and_then(|b| length(b, screen.0)),
-            win.rect.get(3).and_then(|b| length(b, screen.1)),
+            win.rect.get(2).and_then(|b| length(b, screen.0, scale)),
+            win.rect.get(3).and_then(|b| length(b, screen.1, scale)),
         ) else {
             continue;
         };
-        let get = |i: usize, full: f64| w.at.get(i).and_then(|b| length(b, full));
-        let (Some(x), Some(y)) = (get(0, ww), get(1, wh)) else { continue };
-        let (sw, sh) = (get(2, ww).unwrap_or(1.0), get(3, wh).unwrap_or(1.0));
+        // `%` in a widget's `at` is of the screen, as at run time.
+        let get = |i: usize, full: f64| w.at.get(i).and_then(|b| length(b, full, scale));
+        let (Some(ox), Some(oy)) = (get(0, screen.0), get(1, screen.1)) else { continue };
+        let (sw, sh) = (get(2, screen.0).unwrap_or(1.0), get(3, screen.1).unwrap_or(1.0));
+        let x = crate::placement::place(w.anchor.h, ww, ox, sw);
+        let y = crate::placement::place(w.anchor.v, wh, oy, sh);
         if x >= ww || y >= wh || x + sw <= 0.0 || y + sh <= 0.0 {
             let name = w.name.clone().unwrap_or_else(|| w.component.clone());
             diags
@@ -49,7 +60,14 @@ fn check(windows: &[Window], widgets: &[Widget], screen: (f64, f64), diags: &mut
                         win.name
                     ),
                 )
-                .help("positions are relative to the window's top-left corner");
+                .help(if w.anchor.is_default() {
+                    "positions are relative to the window's top-left corner".to_string()
+                } else {
+                    format!(
+                        "`anchor {}` measures the position from that point of the window",
+                        w.anchor.name()
+                    )
+                });
         }
     }
 }

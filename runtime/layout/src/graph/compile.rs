@@ -6,7 +6,8 @@ use super::{LoadError, TemplateRt};
 use crate::actions::{self, CompiledAction};
 use crate::lower::{Base, Lowerer, Scope, Source, value_ty};
 use mocu_jit::{self as jit, EvalCtx, Evaluate};
-use mocu_language::program::{Template, Widget, Window};
+use mocu_language::placement::{self, Anchor, Edge};
+use mocu_language::program::{Bound, Program, Template, Widget, Window};
 use mocu_language::types::TypeKind;
 use parking_lot::Mutex;
 use std::sync::Arc;
@@ -30,6 +31,10 @@ pub(crate) struct CompiledWidget {
     pub(crate) window: String,
     pub(crate) component: String,
     pub(crate) native: bool,
+    /// The scale components draw at (published as the widget's `scale`): the design's, but
+    /// never below 1 — on a screen smaller than the design the boxes shrink and the
+    /// components draw at their own size in them, so text never gets smaller than designed.
+    pub(crate) scale: f64,
     pub(crate) f: FnRef,
     /// Output names, in function output order.
     pub(crate) outputs: Vec<String>,
@@ -118,16 +123,88 @@ impl Builder {
     }
 }
 
+/// How the program's px map to the screen: the screen's size and the design's scale
+/// (`mocu_language::placement`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frame {
+    pub(crate) screen: (f64, f64),
+    pub(crate) scale: f64,
+}
+
+impl Frame {
+    pub(crate) fn of(program: &Program, screen: (f64, f64)) -> Frame {
+        Frame { screen, scale: placement::scale(program.design, screen) }
+    }
+}
+
+/// A position or size in screen px: design px times the scale, or % of the screen.
+fn scaled(
+    lw: &mut Lowerer,
+    e: &Bound,
+    horizontal: bool,
+    scale: f64,
+) -> Result<jit::Expr, LoadError> {
+    let v = lw.coordinate(&e.expr, horizontal).map_err(lower_err)?;
+    if e.expr.ty.unit() == Some("%") || scale == 1.0 {
+        return Ok(v);
+    }
+    Ok(jit::Expr::Arith(jit::Arith::Mul, Box::new(v), Box::new(jit::Expr::Num(scale))))
+}
+
+/// The `x`, `y` (and `w`, `h` when given) of a rectangle in its parent, in screen px: its
+/// offsets measured from the anchor's edges (`mocu_language::placement::place`). `parent`
+/// gives the parent's width (true) or height, asked only for centre and end anchors.
+fn place(
+    lw: &mut Lowerer,
+    rect: &[Bound],
+    anchor: Anchor,
+    scale: f64,
+    parent: &mut dyn FnMut(&mut Lowerer, bool) -> Result<jit::Expr, LoadError>,
+) -> Result<Vec<jit::Expr>, LoadError> {
+    use jit::{Arith, Expr};
+    let bx = Box::new;
+    let mut out = Vec::new();
+    for (i, edge) in [anchor.h, anchor.v].into_iter().enumerate() {
+        let horizontal = i == 0;
+        let Some(offset) = rect.get(i) else { break };
+        let off = scaled(lw, offset, horizontal, scale)?;
+        let size = || rect.get(i + 2);
+        out.push(match edge {
+            Edge::Start => off,
+            Edge::Centre | Edge::End => {
+                let p = parent(lw, horizontal)?;
+                let z = match size() {
+                    Some(z) => scaled(lw, z, horizontal, scale)?,
+                    None => Expr::Num(0.0),
+                };
+                let room = Expr::Arith(Arith::Sub, bx(p), bx(z));
+                if edge == Edge::Centre {
+                    let half = Expr::Arith(Arith::Div, bx(room), bx(Expr::Num(2.0)));
+                    Expr::Arith(Arith::Add, bx(half), bx(off))
+                } else {
+                    Expr::Arith(Arith::Sub, bx(room), bx(off))
+                }
+            }
+        });
+    }
+    for (i, z) in rect.iter().enumerate().skip(2).take(2) {
+        out.push(scaled(lw, z, i == 2, scale)?);
+    }
+    Ok(out)
+}
+
 pub(crate) fn compile_window(
     b: &mut Builder,
     w: &Window,
-    screen: (f64, f64),
+    frame: Frame,
 ) -> Result<CompiledWindow, LoadError> {
+    let screen = frame.screen;
     let mut lw = Lowerer::new(Scope::Plain, screen);
     let mut outs = vec![lw.lower(&w.layer.expr, jit::Ty::Num).map_err(lower_err)?];
-    for (i, r) in w.rect.iter().enumerate().take(4) {
-        outs.push(lw.coordinate(&r.expr, i % 2 == 0).map_err(lower_err)?);
-    }
+    let mut parent = |_: &mut Lowerer, horizontal: bool| {
+        Ok(jit::Expr::Num(if horizontal { screen.0 } else { screen.1 }))
+    };
+    outs.extend(place(&mut lw, &w.rect, w.anchor, frame.scale, &mut parent)?);
     while outs.len() < 5 {
         outs.push(jit::Expr::Num(0.0));
     }
@@ -146,19 +223,29 @@ pub(crate) fn compile_window(
 
 pub(crate) const WINDOW_OUTPUTS: [&str; 7] = ["layer", "x", "y", "w", "h", "opacity", "visible"];
 
+/// `window`: the widget's window, whose size centre and end anchors measure from (the
+/// screen when it has none).
 pub(crate) fn compile_widget(
     b: &mut Builder,
     w: &Widget,
     n: usize,
-    screen: (f64, f64),
+    frame: Frame,
+    window: Option<&Window>,
 ) -> Result<CompiledWidget, LoadError> {
+    let screen = frame.screen;
     let mut lw = Lowerer::new(Scope::Widget { args: &w.args, at: &w.at }, screen);
     let mut outs = Vec::new();
     let mut names = Vec::new();
-    for (i, a) in w.at.iter().enumerate().take(4) {
-        outs.push(lw.coordinate(&a.expr, i % 2 == 0).map_err(lower_err)?);
-        names.push(["x", "y", "w", "h"][i].to_string());
-    }
+    let mut parent = |lw: &mut Lowerer, horizontal: bool| {
+        let i = if horizontal { 2 } else { 3 };
+        match window.and_then(|win| win.rect.get(i)) {
+            Some(size) => scaled(lw, size, horizontal, frame.scale),
+            None => Ok(jit::Expr::Num(if horizontal { screen.0 } else { screen.1 })),
+        }
+    };
+    let at = &w.at[..w.at.len().min(4)];
+    outs.extend(place(&mut lw, at, w.anchor, frame.scale, &mut parent)?);
+    names.extend(["x", "y", "w", "h"][..at.len()].iter().map(|n| n.to_string()));
     if let Some(v) = &w.visible {
         outs.push(lw.lower(&v.expr, jit::Ty::Bool).map_err(lower_err)?);
         names.push("visible".into());
@@ -211,6 +298,7 @@ pub(crate) fn compile_widget(
         window: w.window.clone(),
         component: w.component.clone(),
         native: w.native,
+        scale: frame.scale.max(1.0),
         f,
         outputs: names,
         objects,
@@ -218,18 +306,22 @@ pub(crate) fn compile_widget(
     })
 }
 
+/// `program_windows`: the top-level windows, which a template's widgets may be in too.
 pub(crate) fn compile_template(
     b: &mut Builder,
     t: &Template,
-    screen: (f64, f64),
+    frame: Frame,
+    program_windows: &[Window],
 ) -> Result<TemplateRt, LoadError> {
+    let screen = frame.screen;
     let windows =
-        t.windows.iter().map(|w| compile_window(b, w, screen)).collect::<Result<_, _>>()?;
+        t.windows.iter().map(|w| compile_window(b, w, frame)).collect::<Result<_, _>>()?;
+    let window_of = |name: &str| t.windows.iter().chain(program_windows).find(|w| w.name == name);
     let widgets = t
         .widgets
         .iter()
         .enumerate()
-        .map(|(i, w)| compile_widget(b, w, i, screen))
+        .map(|(i, w)| compile_widget(b, w, i, frame, window_of(&w.window)))
         .collect::<Result<_, _>>()?;
     let watches = t
         .watches

@@ -160,6 +160,9 @@ impl Shared {
                 .map_err(|e| LoadError::World(e.to_string()))?;
             let _ = self.ds.set(g, "component", Value::str(&w.component));
             let _ = self.ds.set(g, "native", Value::Bool(w.native));
+            if w.scale != 1.0 {
+                let _ = self.ds.set(g, "scale", Value::Float(w.scale));
+            }
             let _ = self.ds.set(g, "order", Value::Int(order as i64));
             for (arg, base, objs) in &w.objects {
                 let text = self.path_from(st, base, objs, instance);
