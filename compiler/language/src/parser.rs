@@ -11,8 +11,6 @@ use crate::diagnostics::Diagnostics;
 use crate::source::{FileId, Span};
 use pest::Parser as _;
 use pest::iterators::{Pair, Pairs};
-use pest::pratt_parser::{Assoc, Op, PrattParser};
-use std::sync::OnceLock;
 
 #[derive(pest_derive::Parser)]
 #[grammar = "grammar.pest"]
@@ -52,30 +50,21 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
             }
             ChunkKind::Item => {
                 let src = &text[chunk.start..chunk.end];
-                match Grammar::parse(Rule::item_only, src) {
-                    Ok(mut pairs) => {
-                        let ctx = Ctx {
-                            file,
-                            offset: chunk.start,
-                            depth: 0.into(),
-                            too_deep: None.into(),
-                        };
-                        let Some(top) = pairs.next() else { continue };
-                        if let Some(item) = top.into_inner().find(|p| p.as_rule() != Rule::EOI) {
-                            let item = ctx.item(item);
-                            match ctx.too_deep.get() {
-                                None => items.push(item),
-                                Some(span) => {
-                                    items.extend(broken_let(file, text, &chunk));
-                                    diags
-                                        .error(codes::TOO_DEEP, span, format!("this expression is nested deeper than {MAX_DEPTH} levels"))
-                                        .label("too deep")
-                                        .help("split it with `let`s");
-                                }
-                            }
-                        }
+                match parse_item(file, src, chunk.start) {
+                    Parsed::Item(item) => items.push(*item),
+                    Parsed::Nothing => {}
+                    Parsed::TooDeep(span) => {
+                        items.extend(broken_let(file, text, &chunk));
+                        diags
+                            .error(
+                                codes::TOO_DEEP,
+                                span,
+                                format!("this expression is nested deeper than {MAX_DEPTH} levels"),
+                            )
+                            .label("too deep")
+                            .help("split it with `let`s");
                     }
-                    Err(e) => {
+                    Parsed::Error(e) => {
                         report_pest_error(file, text, chunk.start, src, &e, diags);
                         items.extend(broken_let(file, text, &chunk));
                     }
@@ -84,6 +73,92 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
         }
     }
     File { items }
+}
+
+/// What one item chunk parsed to.
+enum Parsed {
+    Item(Box<Item>),
+    /// Nothing to keep (an empty parse).
+    Nothing,
+    /// Parsed, but nested past [`MAX_DEPTH`] here.
+    TooDeep(Span),
+    Error(Box<pest::error::Error<Rule>>),
+}
+
+/// Nesting (brackets plus `if`s) up to which an item is parsed on the caller's stack.
+const INLINE_NESTING: usize = 48;
+/// Stack given per level of nesting to an item parsed on its own thread (generous: debug
+/// builds use far more per level than release builds).
+const STACK_PER_LEVEL: usize = 32 << 10;
+
+/// Parses one item chunk (`src`, at `offset` in the file).
+///
+/// pest recurses once per bracket and per `if` (`if a then 1 else if b then …` nests without
+/// brackets), and pest's own stack probe costs about a fifth of the parse, so it is off (no
+/// `std` feature) and the depth is bounded here instead: the lexer refuses brackets deeper
+/// than [`crate::lexer::MAX_NESTING`], and an item with more nesting than [`INLINE_NESTING`]
+/// is parsed on a thread whose stack fits it. The syntax tree builder then refuses what is
+/// deeper than [`MAX_DEPTH`].
+fn parse_item(file: FileId, src: &str, offset: usize) -> Parsed {
+    let nesting = nesting_bound(src);
+    if nesting <= INLINE_NESTING {
+        return parse_item_here(file, src, offset);
+    }
+    let stack = (1 << 20) + nesting.saturating_mul(STACK_PER_LEVEL);
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("mocu-parse-deep".into())
+            .stack_size(stack)
+            .spawn_scoped(scope, || parse_item_here(file, src, offset))
+            .ok()
+            .and_then(|handle| handle.join().ok())
+            .unwrap_or(Parsed::TooDeep(Span::new(file, offset, offset + 1)))
+    })
+}
+
+/// An upper bound of how deeply pest will recurse in `src`: the deepest bracket nesting plus
+/// every `if` (each could nest in the one before).
+fn nesting_bound(src: &str) -> usize {
+    let b = src.as_bytes();
+    let (mut depth, mut deepest, mut ifs) = (0usize, 0usize, 0usize);
+    for (i, &c) in b.iter().enumerate() {
+        match c {
+            b'(' | b'[' | b'{' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            b')' | b']' | b'}' => depth = depth.saturating_sub(1),
+            b'i' if b.get(i + 1) == Some(&b'f')
+                && (i == 0 || !is_ident_byte(b[i - 1]))
+                && b.get(i + 2).is_none_or(|&n| !is_ident_byte(n)) =>
+            {
+                ifs += 1
+            }
+            _ => {}
+        }
+    }
+    deepest + ifs
+}
+
+fn is_ident_byte(c: u8) -> bool {
+    c.is_ascii_alphanumeric() || c == b'_'
+}
+
+fn parse_item_here(file: FileId, src: &str, offset: usize) -> Parsed {
+    let mut pairs = match Grammar::parse(Rule::item_only, src) {
+        Ok(pairs) => pairs,
+        Err(e) => return Parsed::Error(Box::new(e)),
+    };
+    let ctx = Ctx { file, offset, depth: 0.into(), too_deep: None.into() };
+    let Some(top) = pairs.next() else { return Parsed::Nothing };
+    let Some(item) = top.into_inner().find(|p| p.as_rule() != Rule::EOI) else {
+        return Parsed::Nothing;
+    };
+    let item = ctx.item(item);
+    match ctx.too_deep.get() {
+        None => Parsed::Item(Box::new(item)),
+        Some(span) => Parsed::TooDeep(span),
+    }
 }
 
 /// A `let NAME` item whose value did not parse (already reported) still defines `NAME`, with
@@ -390,23 +465,7 @@ fn describe_expected(positives: &[Rule], found: &str) -> (String, Option<String>
             }
             Rule::binding_opt | Rule::opt_key | Rule::opt_value => "a binding option or `->`",
             Rule::shift_decl | Rule::mode_block | Rule::shift_mark => "a binding",
-            Rule::coalesce
-            | Rule::range_op
-            | Rule::or_op
-            | Rule::and_op
-            | Rule::eq
-            | Rule::ne
-            | Rule::le
-            | Rule::ge
-            | Rule::lt
-            | Rule::gt
-            | Rule::add
-            | Rule::sub
-            | Rule::mul
-            | Rule::div
-            | Rule::field
-            | Rule::index
-            | Rule::call_args => {
+            Rule::infix | Rule::field | Rule::index | Rule::call_args => {
                 operator = true;
                 continue;
             }
@@ -449,24 +508,34 @@ fn describe_expected(positives: &[Rule], found: &str) -> (String, Option<String>
     (format!("expected {expected}, found {found_text}"), help)
 }
 
-fn pratt() -> &'static PrattParser<Rule> {
-    static PRATT: OnceLock<PrattParser<Rule>> = OnceLock::new();
-    PRATT.get_or_init(|| {
-        PrattParser::new()
-            .op(Op::infix(Rule::range_op, Assoc::Left))
-            .op(Op::infix(Rule::or_op, Assoc::Left))
-            .op(Op::infix(Rule::and_op, Assoc::Left))
-            .op(Op::infix(Rule::eq, Assoc::Left)
-                | Op::infix(Rule::ne, Assoc::Left)
-                | Op::infix(Rule::lt, Assoc::Left)
-                | Op::infix(Rule::le, Assoc::Left)
-                | Op::infix(Rule::gt, Assoc::Left)
-                | Op::infix(Rule::ge, Assoc::Left))
-            .op(Op::infix(Rule::coalesce, Assoc::Right))
-            .op(Op::infix(Rule::add, Assoc::Left) | Op::infix(Rule::sub, Assoc::Left))
-            .op(Op::infix(Rule::mul, Assoc::Left) | Op::infix(Rule::div, Assoc::Left))
-            .op(Op::prefix(Rule::neg) | Op::prefix(Rule::not_op))
-    })
+/// How tightly a binary operator (the text of an `infix` pair) binds, and how it associates:
+/// `..` < `or` < `and` < comparisons < `??` (right) < `+ -` < `* /` < prefixes (`-`, `not`).
+fn binary(op: &str) -> (BinOp, u8, Assoc) {
+    match op {
+        ".." => (BinOp::Range, 10, Assoc::Left),
+        "||" | "or" => (BinOp::Or, 20, Assoc::Left),
+        "&&" | "and" => (BinOp::And, 30, Assoc::Left),
+        "==" => (BinOp::Eq, 40, Assoc::Left),
+        "!=" => (BinOp::Ne, 40, Assoc::Left),
+        "<" => (BinOp::Lt, 40, Assoc::Left),
+        "<=" => (BinOp::Le, 40, Assoc::Left),
+        ">" => (BinOp::Gt, 40, Assoc::Left),
+        ">=" => (BinOp::Ge, 40, Assoc::Left),
+        "??" => (BinOp::Coalesce, 50, Assoc::Right),
+        "+" => (BinOp::Add, 60, Assoc::Left),
+        "-" => (BinOp::Sub, 60, Assoc::Left),
+        "*" => (BinOp::Mul, 70, Assoc::Left),
+        _ => (BinOp::Div, 70, Assoc::Left),
+    }
+}
+
+/// Binding power of the prefixes, above every binary operator.
+const PREFIX: u8 = 80;
+
+#[derive(Clone, Copy)]
+enum Assoc {
+    Left,
+    Right,
 }
 
 struct Ctx {
@@ -917,34 +986,41 @@ impl Ctx {
     }
 
     fn expr_pairs(&self, pairs: Pairs<Rule>) -> Expr {
-        pratt()
-            .map_primary(|q| self.term(q))
-            .map_prefix(|op, rhs| {
-                let span = self.span(&op).to(rhs.span);
-                let op = if op.as_rule() == Rule::neg { UnOp::Neg } else { UnOp::Not };
+        self.climb(&mut pairs.peekable(), 0)
+    }
+
+    /// Precedence climbing over `prefix* term (infix prefix* term)*`: the operators that bind
+    /// tighter than `floor` (Pratt's algorithm).
+    fn climb(&self, pairs: &mut std::iter::Peekable<Pairs<Rule>>, floor: u8) -> Expr {
+        let mut lhs = self.operand(pairs);
+        while let Some(op) = pairs.peek().filter(|op| op.as_rule() == Rule::infix) {
+            let (bin, power, assoc) = binary(op.as_str());
+            if power <= floor {
+                break;
+            }
+            pairs.next();
+            let rhs = self.climb(pairs, if let Assoc::Right = assoc { power - 1 } else { power });
+            let span = lhs.span.to(rhs.span);
+            lhs = Expr { kind: ExprKind::Binary(bin, Box::new(lhs), Box::new(rhs)), span };
+        }
+        lhs
+    }
+
+    /// A term and the prefixes before it.
+    fn operand(&self, pairs: &mut std::iter::Peekable<Pairs<Rule>>) -> Expr {
+        let Some(p) = pairs.next() else {
+            let at = Span::new(self.file, self.offset, self.offset);
+            return Expr { kind: ExprKind::Bool(false), span: at };
+        };
+        match p.as_rule() {
+            Rule::neg | Rule::not_op => {
+                let rhs = self.climb(pairs, PREFIX - 1);
+                let span = self.span(&p).to(rhs.span);
+                let op = if p.as_rule() == Rule::neg { UnOp::Neg } else { UnOp::Not };
                 Expr { kind: ExprKind::Unary(op, Box::new(rhs)), span }
-            })
-            .map_infix(|lhs, op, rhs| {
-                let span = lhs.span.to(rhs.span);
-                let op = match op.as_rule() {
-                    Rule::coalesce => BinOp::Coalesce,
-                    Rule::range_op => BinOp::Range,
-                    Rule::or_op => BinOp::Or,
-                    Rule::and_op => BinOp::And,
-                    Rule::eq => BinOp::Eq,
-                    Rule::ne => BinOp::Ne,
-                    Rule::lt => BinOp::Lt,
-                    Rule::le => BinOp::Le,
-                    Rule::gt => BinOp::Gt,
-                    Rule::ge => BinOp::Ge,
-                    Rule::add => BinOp::Add,
-                    Rule::sub => BinOp::Sub,
-                    Rule::mul => BinOp::Mul,
-                    _ => BinOp::Div,
-                };
-                Expr { kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)), span }
-            })
-            .parse(pairs)
+            }
+            _ => self.term(p),
+        }
     }
 
     /// A primary and its postfixes (field, index, call).
