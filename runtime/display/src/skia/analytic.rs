@@ -280,7 +280,11 @@ impl SkiaCanvas {
                     })
                     .collect()
             });
-            prepared.push(Seg { a, ux, uy, len, bbox, fx });
+            // The same as coverage bytes, for the rows the line crosses whole.
+            let kx = fx.as_ref().map(|fx: &Vec<f32>| {
+                fx.iter().map(|k| (k * 255.0 + 0.5) as u8).collect::<Vec<u8>>()
+            });
+            prepared.push(Seg { a, ux, uy, len, bbox, fx, kx });
         }
         let Some(top) = prepared.iter().map(|g| g.bbox.y).min() else { return Some(()) };
         let bottom = prepared.iter().map(|g| g.bbox.bottom()).max().unwrap_or(top);
@@ -300,6 +304,13 @@ impl SkiaCanvas {
                         continue;
                     }
                     let row = &mut row[g.bbox.x as usize..][..fx.len()];
+                    if fy == 1.0
+                        && let Some(kx) = &g.kx
+                    {
+                        // Wholly crossed: each column's coverage as it is.
+                        pixel::cover_row(row, pre, kx);
+                        continue;
+                    }
                     let run = pixel::scale(pre, (fy * 255.0 + 0.5) as u8);
                     let mut i = 0;
                     while i < fx.len() {
@@ -356,6 +367,7 @@ struct Seg {
     len: f32,
     bbox: IRect,
     fx: Option<Vec<f32>>,
+    kx: Option<Vec<u8>>,
 }
 
 /// The pixels a disc of radius `ro` around `c` may touch (one pixel of anti-aliasing

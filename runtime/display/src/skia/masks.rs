@@ -51,6 +51,8 @@ impl Target<'_> {
 struct Mask {
     bbox: IRect,
     data: Vec<u8>,
+    /// Each row's covered columns, `first..end` (mask columns; empty rows `0..0`).
+    rows: Vec<(u32, u32)>,
 }
 
 #[derive(Default)]
@@ -105,11 +107,18 @@ impl SkiaCanvas {
                 m
             }
         };
-        let (mw, cx) = (bbox.w as usize, (area.x - bbox.x) as usize);
+        let mw = bbox.w as usize;
+        let (c0, c1) = ((area.x - bbox.x) as u32, (area.right() - bbox.x) as u32);
         for y in area.y..area.bottom() {
-            let m = &mask.data[(y - bbox.y) as usize * mw + cx..][..area.w as usize];
-            let row = &mut px[y as usize * w + area.x as usize..][..area.w as usize];
-            pixel::cover_row(row, pre, m);
+            let my = (y - bbox.y) as usize;
+            let (first, end) = mask.rows[my];
+            let (a, b) = (first.max(c0) as usize, end.min(c1) as usize);
+            if a >= b {
+                continue;
+            }
+            let m = &mask.data[my * mw + a..my * mw + b];
+            let x = bbox.x as usize + a;
+            pixel::cover_row(&mut px[y as usize * w + x..][..b - a], pre, m);
         }
     }
 }
@@ -120,5 +129,13 @@ fn rasterise(bbox: IRect, draw: impl FnOnce(&mut Target<'_>, IRect, [u8; 4])) ->
     let mut px = vec![[0u8; 4]; w * h];
     let mut t = Target { px: &mut px, w, ox: bbox.x, oy: bbox.y, drawn: None };
     draw(&mut t, bbox, [0, 0, 0, 255]);
-    Mask { bbox, data: px.iter().map(|p| p[3]).collect() }
+    let data: Vec<u8> = px.iter().map(|p| p[3]).collect();
+    let rows = data
+        .chunks_exact(w.max(1))
+        .map(|r| match r.iter().position(|&k| k != 0) {
+            Some(a) => (a as u32, (w - r.iter().rev().position(|&k| k != 0).unwrap_or(0)) as u32),
+            None => (0, 0),
+        })
+        .collect();
+    Mask { bbox, data, rows }
 }
