@@ -88,6 +88,11 @@ impl Decoder {
         Decoder::default()
     }
 
+    /// Times the H.264 decoder was rebuilt after a decode error (see `h264dec.rs`).
+    pub fn recoveries(&self) -> u64 {
+        self.h264.recoveries
+    }
+
     /// Decodes one unit within the default limits (see [`Decoder::decode_limited`]).
     pub fn decode(&mut self, codec: Codec, data: &[u8]) -> Result<Option<DecodedFrame>, String> {
         self.decode_limited(codec, data, &Limits::default()).map_err(|e| e.to_string())
@@ -321,6 +326,7 @@ fn on_unit(ds: &DataServer, camera: Guid, state: &Mutex<DecodeState>, u: &Encode
         ("refused", Value::Int(st.refused)),
         ("no_picture", Value::Int(st.no_picture)),
         ("decode_errors", Value::Int(st.errors)),
+        ("recoveries", Value::Int(st.decoder.recoveries() as i64)),
     ] {
         let _ = ds.set(camera, k, v);
     }

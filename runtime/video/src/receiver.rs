@@ -205,6 +205,7 @@ pub fn publish_camera(
         ("restarts", Value::Int(0)),
         ("ignored", Value::Int(0)),
         ("decode_errors", Value::Int(0)),
+        ("recoveries", Value::Int(0)),
         ("refused", Value::Int(0)),
         ("dropped_queue", Value::Int(0)),
         ("no_picture", Value::Int(0)),

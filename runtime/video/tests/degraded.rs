@@ -53,9 +53,10 @@ struct Counters {
     late_packets: i64,
     restarts: i64,
     ignored: i64,
+    recoveries: i64,
 }
 
-const NAMES: [&str; 14] = [
+const NAMES: [&str; 15] = [
     "sent",
     "units",
     "frames",
@@ -70,6 +71,7 @@ const NAMES: [&str; 14] = [
     "late_packets",
     "restarts",
     "ignored",
+    "recoveries",
 ];
 
 fn counters(r: &Running) -> Counters {
@@ -89,6 +91,7 @@ fn counters(r: &Running) -> Counters {
         late_packets: g("late_packets"),
         restarts: g("restarts"),
         ignored: g("ignored"),
+        recoveries: g("recoveries"),
     }
 }
 
@@ -217,6 +220,7 @@ fn h264_with_reordered_packets_loses_no_frame() {
 fn h264_with_truncated_packets_keeps_showing_frames() {
     let imp = Impairment { truncate: 0.05, seed: 5, ..Impairment::default() };
     let (link, c) = through_relay_from(MOVING, Kind::RtpH264, imp, "h264 truncate 5%");
+    assert!(c.recoveries > 0, "decode errors were recovered from: {c:?}");
     assert!(link.truncated > 0);
     assert!(c.dropped_network + c.decode_errors > 0, "truncation noticed: {c:?}");
     assert!(shown(&link, &c) >= 0.5, "decoding recovers after errors: {c:?}");
