@@ -252,6 +252,7 @@ pub fn main(args: RunArgs) -> ExitCode {
             screen: (screen.0 as f64, screen.1 as f64),
             jit,
             name: target.bundle.layouts[chosen].path.clone(),
+            stale_after: LayoutConfig::stale_after_from(&target.bundle.schema),
             ..LayoutConfig::default()
         },
         layout: args.layout.clone(),
