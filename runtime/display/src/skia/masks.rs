@@ -117,7 +117,7 @@ impl SkiaCanvas {
                 continue;
             }
             let m = &mask.data[my * mw + a..my * mw + b];
-            let x = bbox.x as usize + a;
+            let x = (bbox.x + a as i32) as usize; // inside the area, so on the pixmap
             pixel::cover_row(&mut px[y as usize * w + x..][..b - a], pre, m);
         }
     }
