@@ -3,8 +3,9 @@
 //! parameters with their types and defaults, and its events; then the native components.
 //!
 //! In a doc comment, a line `// - name: meaning` documents the parameter `name` (it goes to
-//! the table, not to the description). A test (tests/components_doc.rs) fails when the page
-//! is stale; `UPDATE_DOCS=1 cargo test -p mocu-language --test components_doc` rewrites it.
+//! the table, not to the description); indented lines right after it go on with it. A test
+//! (tests/components_doc.rs) fails when the page is stale;
+//! `UPDATE_DOCS=1 cargo test -p mocu-language --test components_doc` rewrites it.
 
 use crate::ast::{Item, Param};
 use crate::builtins;
@@ -145,12 +146,24 @@ fn doc_comment(text: &str, start: usize) -> (Vec<String>, Vec<(String, String)>)
     lines.reverse();
     let mut description = Vec::new();
     let mut params = Vec::new();
+    let mut in_param = false;
     for l in lines {
         match l.strip_prefix("- ").and_then(|r| r.split_once(": ")) {
             Some((name, meaning)) if !name.contains(' ') => {
-                params.push((name.trim_matches('`').to_string(), meaning.to_string()))
+                params.push((name.trim_matches('`').to_string(), meaning.to_string()));
+                in_param = true;
             }
-            _ => description.push(l.to_string()),
+            // An indented line right after a parameter's line goes on with its meaning.
+            _ if in_param && l.starts_with("  ") && !l.trim().is_empty() => {
+                if let Some((_, meaning)) = params.last_mut() {
+                    meaning.push(' ');
+                    meaning.push_str(l.trim());
+                }
+            }
+            _ => {
+                description.push(l.to_string());
+                in_param = false;
+            }
         }
     }
     (description, params)

@@ -67,3 +67,19 @@ fn every_standard_component_is_in_the_reference_with_its_parameters() {
         }
     }
 }
+
+#[test]
+fn an_indented_doc_line_goes_on_with_the_parameter_above_it() {
+    let text = "// A thing.\n// - size: how big it is, in px, or none when not\n//   given\n// More about it.\ncomponent Thing(size: number = 1) {\n}\n";
+    let page =
+        mocu_language::docgen::components_reference(&[("stdlib/thing.mocu".into(), text.into())]);
+    assert!(
+        page.contains("| `size` | number | `1` | how big it is, in px, or none when not given |"),
+        "{page}"
+    );
+    assert!(
+        page.contains("A thing.\nMore about it.") || page.contains("A thing. More about it."),
+        "{page}"
+    );
+    assert!(!page.contains("\n  given"), "{page}");
+}
