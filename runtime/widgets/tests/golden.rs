@@ -254,8 +254,11 @@ fn click_through_the_hud_reaches_the_map_and_opens_its_context_menu() {
     let (x, y) = (mx + sx, my + sy);
     let hud = rig.ds.resolve(&["display", "hud"]).unwrap();
     assert_eq!(rig.display.hit_test(x, y).map(|h| h.window), Some(map), "passes the HUD");
-    // A HUD widget's pixel is the HUD's.
-    assert_eq!(rig.display.hit_test(120.0, 120.0).map(|h| h.window), Some(hud));
+    // A HUD widget's pixel (the middle of the speed dial) is the HUD's.
+    let dial = rig.widget("hud", "speed");
+    let d = |k: &str| rig.ds.try_get(dial, k.into()).and_then(|v| v.as_f64()).unwrap() as f32;
+    let (dx, dy) = (d("x") + d("w") / 2.0, d("y") + d("h") / 2.0);
+    assert_eq!(rig.display.hit_test(dx, dy).map(|h| h.window), Some(hud));
     rig.display.pointer(x, y, PointerEvent::Move);
     let hit = rig.display.pointer(x, y, PointerEvent::Down(1)).unwrap();
     assert_eq!(hit.window, map);
