@@ -3,6 +3,7 @@
 //! MISSION_ACK becomes the call's outcome. Nothing is sent to a system id that does not fit
 //! a command's 8-bit target, nor to an address that has not proved to be the vehicle's.
 
+use crate::lenient::CommandAck;
 use crate::link::{After, Link};
 use crate::vehicle::{Pending, Upload, Vehicle};
 use mavlink::dialects::common::*;
@@ -287,29 +288,33 @@ impl Link {
         self.arm_retry(sys, id);
     }
 
-    /// COMMAND_ACK and the mission protocol's answers.
+    /// A COMMAND_ACK: the waiting call's outcome (a result newer than the dialect refuses it
+    /// with its number).
+    pub(crate) fn acknowledge(&self, v: &mut Vehicle, ack: &CommandAck, after: &mut After) {
+        let Some(i) = v.commands.iter().position(|p| p.command == ack.command) else {
+            return;
+        };
+        let outcome = match ack.result.known {
+            Some(MavResult::MAV_RESULT_ACCEPTED) => CallOutcome::Accepted(vec![]),
+            Some(MavResult::MAV_RESULT_IN_PROGRESS) => {
+                v.commands[i].attempts = 0;
+                return;
+            }
+            Some(r @ (MavResult::MAV_RESULT_FAILED | MavResult::MAV_RESULT_CANCELLED)) => {
+                CallOutcome::Failed(format!("{r:?}"))
+            }
+            Some(other) => CallOutcome::Refused(format!("{other:?}")),
+            None => CallOutcome::Refused(format!("MAV_RESULT {}", ack.result.name(""))),
+        };
+        let p = v.commands.remove(i);
+        self.record_feedback(v.guid, p.label, &outcome);
+        after.replies.push((p.responder, outcome));
+    }
+
+    /// The mission protocol's answers.
     pub(crate) fn answer(&self, v: &mut Vehicle, msg: &MavMessage, after: &mut After) {
         let g = v.guid;
         match msg {
-            MavMessage::COMMAND_ACK(ack) => {
-                let Some(i) = v.commands.iter().position(|p| p.command == ack.command) else {
-                    return;
-                };
-                let outcome = match ack.result {
-                    MavResult::MAV_RESULT_ACCEPTED => CallOutcome::Accepted(vec![]),
-                    MavResult::MAV_RESULT_IN_PROGRESS => {
-                        v.commands[i].attempts = 0;
-                        return;
-                    }
-                    MavResult::MAV_RESULT_FAILED | MavResult::MAV_RESULT_CANCELLED => {
-                        CallOutcome::Failed(format!("{:?}", ack.result))
-                    }
-                    other => CallOutcome::Refused(format!("{other:?}")),
-                };
-                let p = v.commands.remove(i);
-                self.record_feedback(g, p.label, &outcome);
-                after.replies.push((p.responder, outcome));
-            }
             // Legacy peers still send MISSION_REQUEST; the answer is MISSION_ITEM_INT either way.
             #[allow(deprecated)]
             MavMessage::MISSION_REQUEST_INT(MISSION_REQUEST_INT_DATA { seq, .. })

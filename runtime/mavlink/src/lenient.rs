@@ -5,8 +5,8 @@
 //! `unknown(42)` where a name would be.
 
 use mavlink::dialects::common::{
-    GPS_RAW_INT_DATA, GpsFixType, HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState,
-    MavType,
+    GPS_RAW_INT_DATA, GpsFixType, HEARTBEAT_DATA, MavAutopilot, MavCmd, MavMessage, MavModeFlag,
+    MavResult, MavState, MavType,
 };
 use mavlink::error::ParserError;
 use mavlink::{MavlinkVersion, Message};
@@ -52,7 +52,15 @@ pub struct GpsRaw {
     pub data: GPS_RAW_INT_DATA,
 }
 
-/// A decoded message: the two that carry the enums a newer autopilot extends, parsed
+/// COMMAND_ACK with its result kept as a number (a newer autopilot's result refuses the
+/// command with its number rather than leaving it to time out).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CommandAck {
+    pub command: MavCmd,
+    pub result: Lenient<MavResult>,
+}
+
+/// A decoded message: the ones that carry the enums a newer autopilot extends, parsed
 /// leniently, and every other message as the dialect types it.
 /// (`MavMessage` is as large on its own; boxing it would allocate per message.)
 #[allow(clippy::large_enum_variant)]
@@ -60,16 +68,19 @@ pub struct GpsRaw {
 pub enum Msg {
     Heartbeat(Heartbeat),
     GpsRaw(GpsRaw),
+    CommandAck(CommandAck),
     Other(MavMessage),
 }
 
 const HEARTBEAT_ID: u32 = 0;
 const GPS_RAW_INT_ID: u32 = 24;
+const COMMAND_ACK_ID: u32 = 77;
 /// Wire offsets (fields sorted by size, as MAVLink sends them).
 const HB_TYPE: usize = 4;
 const HB_AUTOPILOT: usize = 5;
 const HB_STATUS: usize = 7;
 const GPS_FIX: usize = 28;
+const ACK_RESULT: usize = 2;
 
 /// Parses one payload. HEARTBEAT and GPS_RAW_INT never fail on an enum value.
 pub fn parse(version: MavlinkVersion, msgid: u32, payload: &[u8]) -> Result<Msg, ParserError> {
@@ -113,6 +124,19 @@ pub fn parse(version: MavlinkVersion, msgid: u32, payload: &[u8]) -> Result<Msg,
                 _ => Err(ParserError::UnknownMessage { id: msgid }),
             }
         }
+        COMMAND_ACK_ID => {
+            let mut patched = payload.to_vec();
+            let result = Lenient::<MavResult>::from_raw(byte(ACK_RESULT));
+            if result.known.is_none() {
+                patched[ACK_RESULT] = 0;
+            }
+            match MavMessage::parse(version, msgid, &patched)? {
+                MavMessage::COMMAND_ACK(ack) => {
+                    Ok(Msg::CommandAck(CommandAck { command: ack.command, result }))
+                }
+                _ => Err(ParserError::UnknownMessage { id: msgid }),
+            }
+        }
         _ => MavMessage::parse(version, msgid, payload).map(Msg::Other),
     }
 }
@@ -135,6 +159,10 @@ impl From<MavMessage> for Msg {
             MavMessage::GPS_RAW_INT(data) => Msg::GpsRaw(GpsRaw {
                 fix: Lenient { raw: data.fix_type as u8, known: Some(data.fix_type) },
                 data,
+            }),
+            MavMessage::COMMAND_ACK(ack) => Msg::CommandAck(CommandAck {
+                command: ack.command,
+                result: Lenient { raw: ack.result as u8, known: Some(ack.result) },
             }),
             other => Msg::Other(other),
         }

@@ -29,7 +29,7 @@ mod vehicle;
 
 pub use config::{Counters, LinkConfig, Reason};
 pub use decode::{DecodeCounts, decode_checked, decode_datagram, encode_v2, encode_v2_signed};
-pub use lenient::{GpsRaw, Heartbeat, Lenient, Msg};
+pub use lenient::{CommandAck, GpsRaw, Heartbeat, Lenient, Msg};
 pub use link::Link;
 pub use signing::{Key, Signing};
 

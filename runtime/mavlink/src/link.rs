@@ -171,6 +171,7 @@ impl Link {
                 }
             }
             Msg::GpsRaw(gps) => self.gps_raw(v, &gps),
+            Msg::CommandAck(ack) => self.acknowledge(v, &ack, after),
             Msg::Other(m) => {
                 if let Err(r) = self.telemetry(v, &m) {
                     self.inner.counters.refuse(r, 1);

@@ -333,3 +333,30 @@ fn what_a_link_with_a_key_sends_is_signed_with_it() {
     let counts = mocu_mavlink::decode_checked(&buf[..n], Some(&mut wrong), |_, _| {});
     assert_eq!(counts.bad_signature, 1);
 }
+
+#[test]
+fn a_command_acknowledged_with_a_result_newer_than_the_dialect_is_refused_with_its_number() {
+    let ours = Arc::new(UdpSocket::bind("127.0.0.1:0").unwrap());
+    let w = world(LinkConfig { proof_heartbeats: 1, ..LinkConfig::default() }, Some(ours));
+    let (vehicle, at) = peer();
+    w.link.ingest(&quad(8, 0), Some(at));
+    let v = w.vehicle("mav8");
+    let ds = w.ds.clone();
+    let call = std::thread::spawn(move || ds.call_wait(v, "arm", vec![Value::Bool(true)], None));
+    // The command reaches the vehicle…
+    let mut buf = [0u8; 512];
+    let (n, _) = vehicle.recv_from(&mut buf).unwrap();
+    let mut got = Vec::new();
+    mocu_mavlink::decode_datagram(&buf[..n], |_, m| got.push(m));
+    assert!(matches!(got[..], [mocu_mavlink::Msg::Other(MavMessage::COMMAND_LONG(_))]), "{got:?}");
+    // …which answers with a result our dialect does not know.
+    let mut ack = payload(&MavMessage::COMMAND_ACK(COMMAND_ACK_DATA {
+        command: MavCmd::MAV_CMD_COMPONENT_ARM_DISARM,
+        result: MavResult::MAV_RESULT_ACCEPTED,
+    }));
+    ack.resize(3, 0);
+    ack[2] = 99;
+    w.link.ingest(&frame(8, 1, 77, &ack, 0), None);
+    assert_eq!(call.join().unwrap(), CallOutcome::Refused("MAV_RESULT unknown(99)".into()));
+    assert_eq!(w.status("malformed"), 0);
+}
