@@ -349,7 +349,7 @@ impl Shared {
         c.draw_text(
             &scale_text,
             Point::new(8.0, size.h - 8.0),
-            &TextStyle::new(11.0, dim).baseline(Baseline::Bottom),
+            &TextStyle::new(12.0, dim).baseline(Baseline::Bottom),
         );
         for v in &vehicles {
             for route in &v.routes {
