@@ -144,23 +144,16 @@ fn sarif_for_an_unreadable_path_is_valid_and_marks_the_invocation_unsuccessful()
 fn the_validator_rejects_sarif_missing_a_required_property() {
     let (_, doc) = sarif(&["no/such/layout.mocu"]);
     assert_valid(&doc, "before_removal");
-    let cases: [(&str, fn(&mut serde_json::Value)); 3] = [
-        ("version", |d| {
-            d.as_object_mut().expect("object").remove("version");
-        }),
-        ("name", |d| {
-            d["runs"][0]["tool"]["driver"].as_object_mut().expect("driver").remove("name");
-        }),
-        ("executionSuccessful", |d| {
-            d["runs"][0]["invocations"][0]
-                .as_object_mut()
-                .expect("invocation")
-                .remove("executionSuccessful");
-        }),
+    // (the object, as a JSON pointer, and the required property taken from it)
+    let cases = [
+        ("", "version"),
+        ("/runs/0/tool/driver", "name"),
+        ("/runs/0/invocations/0", "executionSuccessful"),
     ];
-    for (property, remove) in cases {
+    for (object, property) in cases {
         let mut broken = doc.clone();
-        remove(&mut broken);
+        let parent = broken.pointer_mut(object).and_then(|o| o.as_object_mut());
+        assert!(parent.expect(object).remove(property).is_some(), "{object} has {property}");
         let v = violations(&broken, &format!("without_{property}"));
         assert!(
             v.iter().any(|l| l.contains(&format!("'{property}' is a required property"))),
