@@ -12,7 +12,7 @@ use mocu_host::ModuleContext;
 use mocu_layout::{Layout, LayoutConfig, NullSink};
 use mocu_sim::{Sim, SimConfig};
 use mocu_widgets::{Library, MapModule, RendererConfig, WidgetRenderer};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -42,7 +42,7 @@ struct Run {
     _sim: Sim,
 }
 
-fn run(file: &PathBuf, size: (u32, u32), draw: bool) -> Run {
+fn run(file: &Path, size: (u32, u32), draw: bool) -> Run {
     let (bundle, _) =
         mocu_language::load_target(file).unwrap_or_else(|e| panic!("{}: {e:?}", file.display()));
     let program = &bundle.layouts[0].program;
