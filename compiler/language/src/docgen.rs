@@ -82,7 +82,10 @@ in hud {
 **How `at` places a widget.** `at X Y W H`: X and Y are the widget's top-left corner, measured
 from the top-left corner of its window, W and H its width and height; each is in px, or in %
 of the screen (`at 2% 5% 20% 10%`). Inside a component, `w` and `h` are that size. A widget
-that has no size of its own, like `Label`, takes `at X Y` only.
+that has no size of its own, like `Label`, takes `at X Y` only. `anchor bottom-right` (or
+`top`, `centre`, …) measures X and Y from that point of the window instead, and in a layout
+with `design W x H` the px are design px, scaled to the screen (docs/language.md, \"Screen
+sizes\").
 
 **Parameters.** Each parameter is written `name value` after `at`. A parameter with a default
 may be left out; one marked *required* may not. A type ending in `?` may be absent (no data):
