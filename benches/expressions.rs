@@ -162,7 +162,7 @@ const IMPS: [Imp; 4] = [Imp::Jit, Imp::Interp, Imp::Closure, Imp::Evalexpr];
 impl Prepared {
     fn new(c: Case) -> Prepared {
         let n_in = 3;
-        let f = Function { inputs: vec![Ty::Num; n_in], outputs: vec![c.ir] };
+        let f = Function::new(vec![Ty::Num; n_in], vec![c.ir]);
         let ty = f.check().expect("well-typed")[0];
         let jit: Box<dyn Evaluate> =
             Box::new(mocu_jit::compile(std::slice::from_ref(&f)).expect("compiles"));

@@ -13,8 +13,24 @@
 //! - An interpolated string with an absent part is absent (write `"{x}" ?? "--"`).
 //! - `min`/`max` pick by `<` (so `min(-0, 0)` is the first operand), `round` rounds half
 //!   away from zero, `mod` takes the sign of the divisor.
+//! - A function's locals (a layout's `let`s) are computed once per call, in order, before
+//!   its outputs; [`Expr::Local`] reads one. Evaluation has no side effects, so this is the
+//!   value the local's expression would have where it is read.
+//!
+//! # Limits
+//! Both backends, and [`Expr::check`], recurse over the tree. [`Function::check`] measures
+//! every expression's depth first, without recursing, and refuses one deeper than
+//! [`MAX_DEPTH`] with an [`IrError`], so that no IR, however it was built, overflows the
+//! stack. Dropping an expression does not recurse either.
 
 use std::sync::Arc;
+
+/// The deepest expression tree the backends accept (see "Limits"). `mocu-lower` refuses
+/// source expressions nested deeper than 256 levels, and lowering makes at most three IR
+/// levels of one (an interpolation: `Format`, `Coalesce`, `Format`); a caller that builds
+/// IR directly gets an [`IrError`] past this. At this depth a debug build of either
+/// backend stays well within a 2 MiB thread stack.
+pub const MAX_DEPTH: usize = 768;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Ty {
@@ -164,6 +180,9 @@ pub enum Expr {
     Absent(Ty),
     /// Input slot `slot`, already converted to `ty` by whoever filled the slots.
     Input(u32, Ty),
+    /// Local `i` of the function (computed once per call, before the outputs; a local may
+    /// read only the locals before it).
+    Local(u32, Ty),
     Neg(Box<Expr>),
     Not(Box<Expr>),
     Arith(Arith, Box<Expr>, Box<Expr>),
@@ -192,14 +211,52 @@ impl std::error::Error for IrError {}
 
 impl Expr {
     /// The type of the expression, checking its operands; `inputs` gives each slot's type.
+    /// An expression with locals is checked with its function ([`Function::check`]).
     pub fn check(&self, inputs: &[Ty]) -> Result<Ty, IrError> {
-        let want = |e: &Expr, t: Ty| -> Result<(), IrError> {
-            let got = e.check(inputs)?;
-            if got == t {
-                Ok(())
-            } else {
-                Err(IrError(format!("expected {t:?}, got {got:?} in {e:?}")))
+        self.check_depth()?;
+        self.check_in(inputs, &[])
+    }
+
+    /// Refuses an expression deeper than [`MAX_DEPTH`], without recursing.
+    pub fn check_depth(&self) -> Result<(), IrError> {
+        let mut stack = vec![(self, 1usize)];
+        while let Some((e, d)) = stack.pop() {
+            if d > MAX_DEPTH {
+                return Err(IrError(format!(
+                    "the expression is nested more than {MAX_DEPTH} levels deep"
+                )));
             }
+            e.children(&mut |c| stack.push((c, d + 1)));
+        }
+        Ok(())
+    }
+
+    /// [`Expr::check`] once the depth is known to be within bounds; `locals` gives the type
+    /// of each local the expression may read. Walks the tree with a stack of its own (its
+    /// operands' types first, then the node's), so a deep tree costs heap, not stack.
+    fn check_in(&self, inputs: &[Ty], locals: &[Ty]) -> Result<Ty, IrError> {
+        let mut todo = vec![(self, false)];
+        let mut types: Vec<Ty> = Vec::new();
+        let mut kids = Vec::new();
+        while let Some((e, operands_done)) = todo.pop() {
+            if !operands_done {
+                todo.push((e, true));
+                e.children(&mut |c| kids.push(c));
+                todo.extend(kids.drain(..).rev().map(|c| (c, false)));
+                continue;
+            }
+            let mut n = 0;
+            e.children(&mut |_| n += 1);
+            let operands = types.split_off(types.len() - n);
+            types.push(e.node_type(&operands, inputs, locals)?);
+        }
+        Ok(types[0])
+    }
+
+    /// The type of this node given its operands' types (in `children` order).
+    fn node_type(&self, ops: &[Ty], inputs: &[Ty], locals: &[Ty]) -> Result<Ty, IrError> {
+        let want = |i: usize, t: Ty| -> Result<(), IrError> {
+            if ops[i] == t { Ok(()) } else { Err(self.mistyped(i, t, ops[i])) }
         };
         Ok(match self {
             Expr::Num(_) => Ty::Num,
@@ -211,68 +268,77 @@ impl Expr {
                 Some(s) if s == t => *t,
                 _ => return Err(IrError(format!("input {i} is not a {t:?}"))),
             },
-            Expr::Neg(a) => {
-                want(a, Ty::Num)?;
+            Expr::Local(i, t) => match locals.get(*i as usize) {
+                Some(s) if s == t => *t,
+                _ => return Err(IrError(format!("local {i} is not a {t:?} defined before"))),
+            },
+            Expr::Neg(_) | Expr::Arith(..) => {
+                (0..ops.len()).try_for_each(|i| want(i, Ty::Num))?;
                 Ty::Num
             }
-            Expr::Not(a) => {
-                want(a, Ty::Bool)?;
+            Expr::Not(_) | Expr::And(..) | Expr::Or(..) => {
+                (0..ops.len()).try_for_each(|i| want(i, Ty::Bool))?;
                 Ty::Bool
             }
-            Expr::Arith(_, a, b) => {
-                want(a, Ty::Num)?;
-                want(b, Ty::Num)?;
-                Ty::Num
-            }
-            Expr::Cmp(op, a, b) => {
-                let t = a.check(inputs)?;
-                want(b, t)?;
-                if !matches!(op, Cmp::Eq | Cmp::Ne) && t != Ty::Num {
-                    return Err(IrError(format!("{op:?} on {t:?}")));
+            Expr::Cmp(op, ..) => {
+                want(1, ops[0])?;
+                if !matches!(op, Cmp::Eq | Cmp::Ne) && ops[0] != Ty::Num {
+                    return Err(IrError(format!("{op:?} on {:?}", ops[0])));
                 }
                 Ty::Bool
             }
-            Expr::And(a, b) | Expr::Or(a, b) => {
-                want(a, Ty::Bool)?;
-                want(b, Ty::Bool)?;
-                Ty::Bool
+            Expr::If(..) => {
+                want(0, Ty::Bool)?;
+                want(2, ops[1])?;
+                ops[1]
             }
-            Expr::If(c, a, b) => {
-                want(c, Ty::Bool)?;
-                let t = a.check(inputs)?;
-                want(b, t)?;
-                t
+            Expr::Coalesce(..) => {
+                want(1, ops[0])?;
+                ops[0]
             }
-            Expr::Coalesce(a, b) => {
-                let t = a.check(inputs)?;
-                want(b, t)?;
-                t
-            }
-            Expr::Present(a) => {
-                a.check(inputs)?;
-                Ty::Bool
-            }
-            Expr::Call(f, args) => {
-                if args.len() != f.arity() {
+            Expr::Present(_) => Ty::Bool,
+            Expr::Call(f, _) => {
+                if ops.len() != f.arity() {
                     return Err(IrError(format!("{f:?} takes {} arguments", f.arity())));
                 }
-                for a in args {
-                    want(a, Ty::Num)?;
-                }
+                (0..ops.len()).try_for_each(|i| want(i, Ty::Num))?;
                 f.result()
             }
             Expr::Format(pieces) => {
+                let mut i = 0;
                 for p in pieces {
-                    match p {
-                        Piece::Text(_) => {}
-                        Piece::Num(e, _) => want(e, Ty::Num)?,
-                        Piece::Str(e) => want(e, Ty::Str)?,
-                        Piece::Bool(e) => want(e, Ty::Bool)?,
-                    }
+                    let t = match p {
+                        Piece::Text(_) => continue,
+                        Piece::Num(..) => Ty::Num,
+                        Piece::Str(_) => Ty::Str,
+                        Piece::Bool(_) => Ty::Bool,
+                    };
+                    want(i, t)?;
+                    i += 1;
                 }
                 Ty::Str
             }
         })
+    }
+
+    /// Operand `i` has type `got` where this node needs `want` (named, not printed: the
+    /// operand may be arbitrarily deep).
+    #[cold]
+    fn mistyped(&self, i: usize, want: Ty, got: Ty) -> IrError {
+        let name = match self {
+            Expr::Neg(_) => "Neg".to_string(),
+            Expr::Not(_) => "Not".into(),
+            Expr::Arith(op, ..) => format!("{op:?}"),
+            Expr::Cmp(op, ..) => format!("{op:?}"),
+            Expr::And(..) => "And".into(),
+            Expr::Or(..) => "Or".into(),
+            Expr::If(..) => "If".into(),
+            Expr::Coalesce(..) => "Coalesce".into(),
+            Expr::Call(f, _) => format!("{f:?}"),
+            Expr::Format(_) => "Format".into(),
+            _ => "a leaf".into(),
+        };
+        IrError(format!("expected {want:?}, got {got:?} as operand {i} of {name}"))
     }
 
     /// The type of a well-typed expression (see [`Expr::check`]).
@@ -287,7 +353,7 @@ impl Expr {
             | Expr::Present(_) => Ty::Bool,
             Expr::Str(_) | Expr::Format(_) => Ty::Str,
             Expr::Color(_) => Ty::Color,
-            Expr::Absent(t) | Expr::Input(_, t) => *t,
+            Expr::Absent(t) | Expr::Input(_, t) | Expr::Local(_, t) => *t,
             Expr::If(_, a, _) | Expr::Coalesce(a, _) => a.ty(),
             Expr::Call(f, _) => f.result(),
         }
@@ -301,45 +367,138 @@ impl Expr {
     }
 
     fn walk(&self, f: &mut dyn FnMut(&Expr)) {
-        f(self);
+        let mut stack = vec![self];
+        while let Some(e) = stack.pop() {
+            f(e);
+            e.children(&mut |c| stack.push(c));
+        }
+    }
+
+    /// Calls `f` on each direct operand (one level: nothing here recurses).
+    fn children<'a>(&'a self, f: &mut dyn FnMut(&'a Expr)) {
         match self {
-            Expr::Neg(a) | Expr::Not(a) | Expr::Present(a) => a.walk(f),
+            Expr::Neg(a) | Expr::Not(a) | Expr::Present(a) => f(a),
             Expr::Arith(_, a, b)
             | Expr::Cmp(_, a, b)
             | Expr::And(a, b)
             | Expr::Or(a, b)
             | Expr::Coalesce(a, b) => {
-                a.walk(f);
-                b.walk(f);
+                f(a);
+                f(b);
             }
             Expr::If(c, a, b) => {
-                c.walk(f);
-                a.walk(f);
-                b.walk(f);
+                f(c);
+                f(a);
+                f(b);
             }
-            Expr::Call(_, args) => args.iter().for_each(|a| a.walk(f)),
+            Expr::Call(_, args) => args.iter().for_each(f),
             Expr::Format(ps) => {
                 for p in ps {
                     if let Piece::Num(e, _) | Piece::Str(e) | Piece::Bool(e) = p {
-                        e.walk(f)
+                        f(e)
+                    }
+                }
+            }
+            Expr::Num(_)
+            | Expr::Bool(_)
+            | Expr::Str(_)
+            | Expr::Color(_)
+            | Expr::Absent(_)
+            | Expr::Input(..)
+            | Expr::Local(..) => {}
+        }
+    }
+
+    /// Moves the operands that have operands of their own to `out`, leaving leaves behind.
+    fn take_children(&mut self, out: &mut Vec<Expr>) {
+        let mut take = |e: &mut Expr| {
+            if !e.is_leaf() {
+                out.push(std::mem::replace(e, Expr::Absent(Ty::Num)));
+            }
+        };
+        match self {
+            Expr::Neg(a) | Expr::Not(a) | Expr::Present(a) => take(a),
+            Expr::Arith(_, a, b)
+            | Expr::Cmp(_, a, b)
+            | Expr::And(a, b)
+            | Expr::Or(a, b)
+            | Expr::Coalesce(a, b) => {
+                take(a);
+                take(b);
+            }
+            Expr::If(c, a, b) => {
+                take(c);
+                take(a);
+                take(b);
+            }
+            Expr::Call(_, args) => args.iter_mut().for_each(take),
+            Expr::Format(ps) => {
+                for p in ps {
+                    if let Piece::Num(e, _) | Piece::Str(e) | Piece::Bool(e) = p {
+                        take(e)
                     }
                 }
             }
             _ => {}
         }
     }
+
+    fn is_leaf(&self) -> bool {
+        let mut leaf = true;
+        self.children(&mut |_| leaf = false);
+        leaf
+    }
+}
+
+/// Dropping a deep tree would recurse once per level: operands with operands are moved to
+/// a list and dropped from there instead.
+impl Drop for Expr {
+    fn drop(&mut self) {
+        let mut pending = Vec::new();
+        self.take_children(&mut pending);
+        while let Some(mut e) = pending.pop() {
+            e.take_children(&mut pending);
+        }
+    }
 }
 
 /// A function: typed input slots in, one slot per output expression out. A widget's
-/// expressions compile together as one function.
-#[derive(Clone, Debug, PartialEq)]
+/// expressions compile together as one function. Its locals are computed first, in order,
+/// once per call; each may read the inputs and the locals before it, and the outputs read
+/// any of them ([`Expr::Local`]).
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Function {
     pub inputs: Vec<Ty>,
+    pub locals: Vec<Expr>,
     pub outputs: Vec<Expr>,
 }
 
 impl Function {
+    /// A function without locals.
+    pub fn new(inputs: Vec<Ty>, outputs: Vec<Expr>) -> Function {
+        Function { inputs, locals: Vec::new(), outputs }
+    }
+
+    /// The output types, checking every expression (depth first, see "Limits").
     pub fn check(&self) -> Result<Vec<Ty>, IrError> {
-        self.outputs.iter().map(|e| e.check(&self.inputs)).collect()
+        let locals = self.local_types()?;
+        self.outputs
+            .iter()
+            .map(|e| {
+                e.check_depth()?;
+                e.check_in(&self.inputs, &locals)
+            })
+            .collect()
+    }
+
+    /// The type of each local, checking each against the inputs and the locals before it.
+    pub fn local_types(&self) -> Result<Vec<Ty>, IrError> {
+        let mut types = Vec::with_capacity(self.locals.len());
+        for e in &self.locals {
+            e.check_depth()?;
+            let t = e.check_in(&self.inputs, &types)?;
+            types.push(t);
+        }
+        Ok(types)
     }
 }

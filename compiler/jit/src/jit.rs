@@ -242,7 +242,14 @@ fn translate_function(
         inputs: params[0],
         ctx: params[2],
         constants,
+        locals: Vec::with_capacity(f.locals.len()),
     };
+    // Locals first, in order, each once: their values are SSA values every output may use
+    // (straight-line code; the blocks `format` adds rejoin before the next expression).
+    for e in &f.locals {
+        let v = t.expr(e);
+        t.locals.push(v);
+    }
     for (i, e) in f.outputs.iter().enumerate() {
         let (v, p) = t.expr(e);
         let off = i as i32 * SLOT;
@@ -267,6 +274,8 @@ struct Translator<'a> {
     inputs: Value,
     ctx: Value,
     constants: &'a mut Vec<Arc<str>>,
+    /// The values of the function's locals computed so far.
+    locals: Vec<Pv>,
 }
 
 /// A value and its presence flag (an i8, 0 or 1).
@@ -346,6 +355,7 @@ impl Translator<'_> {
                 let p = self.b.ins().load(types::I8, flags, self.inputs, off + PRESENT);
                 (v, p)
             }
+            Expr::Local(i, _) => self.locals[*i as usize],
             Expr::Neg(a) => {
                 let (a, p) = self.expr(a);
                 (self.b.ins().fneg(a), p)

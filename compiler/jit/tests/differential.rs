@@ -1,6 +1,6 @@
 //! Differential tests: random well-typed expressions give the same results under the JIT
 //! and the reference interpreter — absent propagation, division by zero, NaN and overflow
-//! included.
+//! included, and functions whose locals (`let`s) are read by later locals and outputs.
 
 #![forbid(unsafe_code)]
 use mocu_jit::*;
@@ -15,9 +15,12 @@ fn inputs_of(t: Ty) -> Vec<u32> {
     INPUTS.iter().enumerate().filter(|(_, x)| **x == t).map(|(i, _)| i as u32).collect()
 }
 
-fn leaf(t: Ty) -> BoxedStrategy<Expr> {
+/// A leaf of type `t`: an input, a constant, absent, or one of `locals` (the types of the
+/// locals it may read) of that type.
+fn leaf(t: Ty, locals: &[Ty]) -> BoxedStrategy<Expr> {
     let ins = inputs_of(t);
     let input = proptest::sample::select(ins).prop_map(move |i| Expr::Input(i, t));
+    let mine: Vec<u32> = (0..locals.len() as u32).filter(|i| locals[*i as usize] == t).collect();
     let constant = match t {
         Ty::Num => prop_oneof![
             Just(0.0),
@@ -35,13 +38,19 @@ fn leaf(t: Ty) -> BoxedStrategy<Expr> {
             .boxed(),
         Ty::Color => any::<u32>().prop_map(Expr::Color).boxed(),
     };
-    prop_oneof![4 => input, 3 => constant, 1 => Just(Expr::Absent(t))].boxed()
+    if mine.is_empty() {
+        return prop_oneof![4 => input, 3 => constant, 1 => Just(Expr::Absent(t))].boxed();
+    }
+    let local = proptest::sample::select(mine).prop_map(move |i| Expr::Local(i, t));
+    prop_oneof![4 => input, 3 => constant, 1 => Just(Expr::Absent(t)), 4 => local].boxed()
 }
 
-fn expr(t: Ty, depth: u32) -> BoxedStrategy<Expr> {
+fn expr(t: Ty, depth: u32, locals: &[Ty]) -> BoxedStrategy<Expr> {
     if depth == 0 {
-        return leaf(t);
+        return leaf(t, locals);
     }
+    let expr = |t: Ty, d: u32| expr(t, d, locals);
+    let leaf = |t: Ty| leaf(t, locals);
     let d = depth - 1;
     let bx = Box::new;
     let generic = prop_oneof![
@@ -89,10 +98,11 @@ fn expr(t: Ty, depth: u32) -> BoxedStrategy<Expr> {
             let cmp = prop_oneof![Just(Cmp::Lt), Just(Cmp::Le), Just(Cmp::Gt), Just(Cmp::Ge), Just(Cmp::Eq), Just(Cmp::Ne)];
             let eq = prop_oneof![Just(Cmp::Eq), Just(Cmp::Ne)];
             let other = prop_oneof![Just(Ty::Bool), Just(Ty::Str), Just(Ty::Color)];
+            let (sub, owned) = (self::expr, locals.to_vec());
             prop_oneof![
                 2 => leaf(t),
                 3 => (cmp, expr(Ty::Num, d), expr(Ty::Num, d)).prop_map(move |(op, a, b)| Expr::Cmp(op, bx(a), bx(b))),
-                2 => (eq, other).prop_flat_map(move |(op, ty)| (Just(op), expr(ty, d), expr(ty, d)))
+                2 => (eq, other).prop_flat_map(move |(op, ty)| (Just(op), sub(ty, d, &owned), sub(ty, d, &owned)))
                     .prop_map(move |(op, a, b)| Expr::Cmp(op, bx(a), bx(b))),
                 2 => (expr(t, d), expr(t, d)).prop_map(move |(a, b)| Expr::And(bx(a), bx(b))),
                 2 => (expr(t, d), expr(t, d)).prop_map(move |(a, b)| Expr::Or(bx(a), bx(b))),
@@ -210,15 +220,40 @@ fn any_ty() -> impl Strategy<Value = Ty> {
     prop_oneof![Just(Ty::Num), Just(Ty::Bool), Just(Ty::Str), Just(Ty::Color)]
 }
 
+/// A function with up to five locals, each reading inputs and the locals before it, and
+/// outputs reading all of them.
+fn function_with_locals() -> impl Strategy<Value = Function> {
+    proptest::collection::vec(any_ty(), 0..6).prop_flat_map(|types| {
+        let locals: Vec<BoxedStrategy<Expr>> =
+            (0..types.len()).map(|i| expr(types[i], 3, &types[..i])).collect();
+        let outputs =
+            proptest::collection::vec(any_ty().prop_flat_map(move |t| expr(t, 3, &types)), 1..5);
+        (locals, outputs).prop_map(|(locals, outputs)| Function {
+            inputs: INPUTS.to_vec(),
+            locals,
+            outputs,
+        })
+    })
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
 
     #[test]
     fn jit_and_interpreter_agree_on_random_expressions(
-        outputs in proptest::collection::vec(any_ty().prop_flat_map(|t| expr(t, 4)), 1..6),
+        outputs in proptest::collection::vec(any_ty().prop_flat_map(|t| expr(t, 4, &[])), 1..6),
         ins in proptest::collection::vec(inputs(), 1..6),
     ) {
-        let f = Function { inputs: INPUTS.to_vec(), outputs };
+        let f = Function::new(INPUTS.to_vec(), outputs);
+        f.check().map_err(|e| TestCaseError::fail(e.to_string()))?;
+        run(&f, &ins)?;
+    }
+
+    #[test]
+    fn jit_and_interpreter_agree_on_random_functions_with_locals(
+        f in function_with_locals(),
+        ins in proptest::collection::vec(inputs(), 1..6),
+    ) {
         f.check().map_err(|e| TestCaseError::fail(e.to_string()))?;
         run(&f, &ins)?;
     }
@@ -245,7 +280,7 @@ fn jit_and_interpreter_agree_on_cases_that_once_differed() {
         Some(-1e-300),
     )];
     for (name, e, x0) in cases {
-        let f = Function { inputs: INPUTS.to_vec(), outputs: vec![e] };
+        let f = Function::new(INPUTS.to_vec(), vec![e]);
         let ins = Inputs {
             nums: [x0, Some(1.0), None],
             bools: [Some(true), Some(false)],

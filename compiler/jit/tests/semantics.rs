@@ -1,6 +1,7 @@
 //! The IR's documented semantics, by example, on both backends.
 
 #![forbid(unsafe_code)]
+use mocu_jit::ir::MAX_DEPTH;
 use mocu_jit::*;
 use std::sync::Arc;
 
@@ -16,7 +17,7 @@ fn input(i: u32, t: Ty) -> Expr {
 
 /// Evaluates `e` with the JIT and the interpreter; both must agree; returns the result.
 fn eval(e: Expr, inputs: &[(Ty, Slot)]) -> Out {
-    let f = Function { inputs: inputs.iter().map(|i| i.0).collect(), outputs: vec![e] };
+    let f = Function::new(inputs.iter().map(|i| i.0).collect(), vec![e]);
     let unit = compile(std::slice::from_ref(&f)).expect("compiles");
     let interp = Interpreter::new(&[f]).expect("checks");
     let slots: Vec<Slot> = inputs.iter().map(|i| i.1).collect();
@@ -101,7 +102,7 @@ fn string_inputs_compare_by_content() {
     let s = Slot::str(&mut ctx, Arc::from("usv"));
     let e = Expr::Cmp(Cmp::Eq, b(input(0, Ty::Str)), b(Expr::Str("usv".into())));
     // Inputs carry handles into the caller's context: build the context the same way.
-    let f = Function { inputs: vec![Ty::Str], outputs: vec![e] };
+    let f = Function::new(vec![Ty::Str], vec![e]);
     for ev in [
         Box::new(compile(std::slice::from_ref(&f)).unwrap()) as Box<dyn Evaluate>,
         Box::new(Interpreter::new(std::slice::from_ref(&f)).unwrap()),
@@ -136,6 +137,7 @@ fn builtins_behave_as_documented() {
 fn many_outputs_of_one_function_are_all_written() {
     let f = Function {
         inputs: vec![Ty::Num],
+        locals: vec![],
         outputs: vec![
             Expr::Arith(Arith::Add, b(input(0, Ty::Num)), b(num(1.0))),
             Expr::Cmp(Cmp::Gt, b(input(0, Ty::Num)), b(num(35.0))),
@@ -155,6 +157,7 @@ fn many_outputs_of_one_function_are_all_written() {
 fn ill_typed_ir_is_refused_before_code_generation() {
     let bad = Function {
         inputs: vec![],
+        locals: vec![],
         outputs: vec![Expr::Arith(Arith::Add, b(Expr::Bool(true)), b(num(1.0)))],
     };
     assert!(matches!(compile(std::slice::from_ref(&bad)), Err(JitError::Ir(_))));
@@ -167,4 +170,96 @@ fn comparing_absent_strings_is_absent_even_with_no_string_in_the_context() {
     // meaningless handle, which indexed an empty string table and aborted.
     let e = Expr::Cmp(Cmp::Eq, b(input(0, Ty::Str)), b(input(1, Ty::Str)));
     assert_eq!(eval(e, &[(Ty::Str, Slot::ABSENT), (Ty::Str, Slot::ABSENT)]), Out::Absent);
+}
+
+/// Evaluates a function's one output under both backends (they must agree).
+fn eval_function(f: Function, inputs: &[Slot]) -> Out {
+    let unit = compile(std::slice::from_ref(&f)).expect("compiles");
+    let interp = Interpreter::new(&[f]).expect("checks");
+    let mut results = Vec::new();
+    for ev in [&unit as &dyn Evaluate, &interp] {
+        let mut ctx = ev.context();
+        let mut out = [Slot::ABSENT];
+        ev.call(0, inputs, &mut out, &mut ctx);
+        results.push(out[0].decode(ev.output_types(0)[0], &ctx));
+    }
+    assert_eq!(results[0], results[1], "JIT and interpreter disagree");
+    results.pop().unwrap()
+}
+
+#[test]
+fn a_local_is_computed_once_and_read_by_every_use() {
+    // 60 doubling `let`s: local i is local i-1 + local i-1. As a tree this is 2^60 nodes;
+    // as locals, 60 additions.
+    let local = |i: u32| Expr::Local(i, Ty::Num);
+    let mut locals = vec![input(0, Ty::Num)];
+    for i in 1..=60 {
+        locals.push(Expr::Arith(Arith::Add, b(local(i - 1)), b(local(i - 1))));
+    }
+    let f = Function { inputs: vec![Ty::Num], locals, outputs: vec![local(60)] };
+    assert_eq!(eval_function(f, &[Slot::num(3.0)]), Out::Num(3.0 * 2f64.powi(60)));
+}
+
+#[test]
+fn an_absent_input_makes_every_local_built_on_it_absent() {
+    let locals = vec![
+        Expr::Arith(Arith::Mul, b(input(0, Ty::Num)), b(num(2.0))),
+        Expr::Coalesce(b(Expr::Local(0, Ty::Num)), b(num(-1.0))),
+    ];
+    let f = Function { inputs: vec![Ty::Num], locals, outputs: vec![Expr::Local(1, Ty::Num)] };
+    assert_eq!(eval_function(f, &[Slot::ABSENT]), Out::Num(-1.0));
+}
+
+#[test]
+fn a_local_that_reads_a_later_local_or_the_wrong_type_is_refused() {
+    let forward = Function {
+        inputs: vec![],
+        locals: vec![Expr::Local(1, Ty::Num), num(1.0)],
+        outputs: vec![Expr::Local(0, Ty::Num)],
+    };
+    let wrong_type = Function {
+        inputs: vec![],
+        locals: vec![Expr::Bool(true)],
+        outputs: vec![Expr::Local(0, Ty::Num)],
+    };
+    for f in [forward, wrong_type] {
+        assert!(matches!(compile(std::slice::from_ref(&f)), Err(JitError::Ir(_))));
+        assert!(Interpreter::new(&[f]).is_err());
+    }
+}
+
+/// `n` additions nested in one another, built without recursion.
+fn nested_adds(n: usize) -> Expr {
+    let mut e = input(0, Ty::Num);
+    for _ in 0..n {
+        e = Expr::Arith(Arith::Add, b(e), b(num(1.0)));
+    }
+    e
+}
+
+#[test]
+fn ir_nested_deeper_than_the_limit_is_refused_cleanly_by_both_backends() {
+    // Built directly, bypassing the checker's 256-level limit: both backends and the type
+    // check must refuse it with an error instead of overflowing the stack, and dropping it
+    // must not overflow either (this test thread has a 2 MiB stack).
+    for (outputs, locals) in [
+        (vec![nested_adds(100_000)], vec![]),
+        (vec![Expr::Local(0, Ty::Num)], vec![nested_adds(100_000)]),
+    ] {
+        let f = Function { inputs: vec![Ty::Num], locals, outputs };
+        match compile(std::slice::from_ref(&f)) {
+            Err(JitError::Ir(e)) => assert!(e.0.contains("levels deep"), "{e}"),
+            Err(e) => panic!("refused for another reason: {e}"),
+            Ok(_) => panic!("compiled a 100,000-level expression"),
+        }
+        assert!(Interpreter::new(std::slice::from_ref(&f)).is_err());
+        assert!(f.check().is_err());
+    }
+    assert!(nested_adds(100_000).check(&[Ty::Num]).is_err());
+}
+
+#[test]
+fn ir_at_the_depth_limit_runs_on_both_backends() {
+    let e = nested_adds(MAX_DEPTH - 1);
+    assert_eq!(eval(e, &[(Ty::Num, Slot::num(0.0))]), Out::Num((MAX_DEPTH - 1) as f64));
 }

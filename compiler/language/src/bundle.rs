@@ -118,7 +118,9 @@ pub fn read(bytes: &[u8]) -> Result<Bundle, BundleError> {
     if crc32(body) != want_crc {
         return Err(BundleError::Corrupt("checksum mismatch".into()));
     }
-    serde_json::from_slice(body).map_err(|e| BundleError::Malformed(e.to_string()))
+    let bundle = serde_json::from_slice(body).map_err(|e| BundleError::Malformed(e.to_string()));
+    crate::program::Lets::end_reading();
+    bundle
 }
 
 /// CRC-32 (IEEE 802.3, reflected, as zlib).

@@ -1,17 +1,25 @@
 //! The checked program: what the compiler hands to the runtime. Every expression is typed and
 //! carries its span; every bound expression lists its paths, which is its subscription set.
-//! Names are resolved: `let`s are inlined, component parameters are [`Node::Param`],
-//! template variables and `self` are path bases. This is what a bundle stores (serde).
+//! Names are resolved: a `let` is checked once and its uses refer to it ([`Node::Let`], see
+//! [`Let`]), component parameters are [`Node::Param`], template variables and `self` are
+//! path bases. This is what a bundle stores (serde; `let`s by number, see [`Lets`]).
 
 use crate::ast::{BinOp, UnOp};
 use crate::source::Span;
-use crate::types::Type;
+use crate::types::{Type, TypeKind};
 use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
 use std::fmt;
+use std::sync::Arc;
 
 /// One checked layout file and everything it uses.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Program {
+    /// Every `let` of the program, each checked once, in the order they were checked (a
+    /// `let` reads only those before it). First, so that a bundle defines them before any
+    /// use (see [`Lets`]).
+    #[serde(default)]
+    pub lets: Lets,
     /// The layout's path (as given), then the files it uses.
     pub files: Vec<String>,
     pub windows: Vec<Window>,
@@ -52,6 +60,9 @@ pub enum Node {
     /// Milliseconds.
     Duration(f64),
     Path(Path),
+    /// The value of a `let`, checked once and shared by all its uses (its type is the
+    /// value's). A `let` whose value is a path or a constant is copied instead.
+    Let(LetRef),
     /// A component parameter (in a component body) or a sibling argument (in a widget).
     Param(String),
     /// The widget's width `w` or height `h` in a component body.
@@ -99,7 +110,7 @@ pub enum FormatPart {
 }
 
 /// `{x:03.1}`: zero padding, minimum width, digits after the point.
-#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct FormatSpec {
     pub zero: bool,
     pub width: Option<u32>,
@@ -376,49 +387,90 @@ pub enum SelectTarget {
 }
 
 impl Bound {
-    /// Wraps an expression, collecting its paths.
+    /// Wraps an expression, collecting its paths: its own and those of the `let`s it reads,
+    /// in order of first appearance, each `let` once (one that reads few paths has them
+    /// listed already; the others are walked without recursion, so the cost is linear in
+    /// the `let`s reached).
     pub fn new(expr: Expr) -> Bound {
-        let mut paths = Vec::new();
-        expr.collect_paths(&mut paths);
+        let own = expr.reads();
+        let paths = collect_paths(&own);
         Bound { expr, paths }
     }
 }
 
-impl Expr {
-    fn collect_paths(&self, out: &mut Vec<Path>) {
-        match &self.node {
-            Node::Path(p) if !out.contains(p) => {
-                out.push(p.clone());
-            }
-            Node::RangeEnd { range, .. } => range.collect_paths(out),
-            Node::Range { lo, hi } => {
-                lo.collect_paths(out);
-                hi.collect_paths(out);
-            }
-            Node::Unary { arg, .. } => arg.collect_paths(out),
-            Node::Binary { lhs, rhs, .. } => {
-                lhs.collect_paths(out);
-                rhs.collect_paths(out);
-            }
-            Node::If { cond, then, other } => {
-                cond.collect_paths(out);
-                then.collect_paths(out);
-                other.collect_paths(out);
-            }
-            Node::Call { args, .. } => args.iter().for_each(|a| a.collect_paths(out)),
-            Node::Format(parts) => parts.iter().for_each(|p| {
-                if let FormatPart::Value { expr, .. } = p {
-                    expr.collect_paths(out)
+/// Every path of `reads` and of the `let`s they name, each once, in order of appearance;
+/// `None` when there are more than `limit`.
+fn collect_paths_upto(reads: &[Read], limit: usize) -> Option<Vec<Path>> {
+    let mut paths = Vec::new();
+    let mut seen_paths: HashSet<&Path> = HashSet::new();
+    let mut seen_lets: HashSet<*const Let> = HashSet::new();
+    let mut stack: Vec<(&[Read], usize)> = vec![(reads, 0)];
+    while let Some((list, i)) = stack.pop() {
+        let Some(r) = list.get(i) else { continue };
+        stack.push((list, i + 1));
+        let more: &[Path] = match r {
+            Read::Path(p) => std::slice::from_ref(p),
+            Read::Let(l) => {
+                if !seen_lets.insert(Arc::as_ptr(&l.0)) {
+                    continue;
                 }
-            }),
-            _ => {}
+                match &l.0.paths {
+                    Some(ps) => ps,
+                    None => {
+                        stack.push((&l.0.reads, 0));
+                        continue;
+                    }
+                }
+            }
+        };
+        for p in more {
+            if seen_paths.insert(p) {
+                if paths.len() == limit {
+                    return None;
+                }
+                paths.push(p.clone());
+            }
         }
+    }
+    Some(paths)
+}
+
+fn collect_paths(reads: &[Read]) -> Vec<Path> {
+    collect_paths_upto(reads, usize::MAX).unwrap_or_default()
+}
+
+impl Expr {
+    /// The paths and `let`s this expression names itself (not through the `let`s), each
+    /// once, in order of appearance.
+    pub fn reads(&self) -> Vec<Read> {
+        let mut out = Vec::new();
+        let mut seen_paths: HashSet<Path> = HashSet::new();
+        let mut seen_lets: HashSet<*const Let> = HashSet::new();
+        self.walk(&mut |e| match &e.node {
+            Node::Path(p) if !seen_paths.contains(p) => {
+                seen_paths.insert(p.clone());
+                out.push(Read::Path(p.clone()));
+            }
+            Node::Let(l) if seen_lets.insert(Arc::as_ptr(&l.0)) => out.push(Read::Let(l.clone())),
+            _ => {}
+        });
+        out
+    }
+
+    /// The expression a `let` use stands for (the expression itself when it is no `let`).
+    pub fn peel(&self) -> &Expr {
+        let mut e = self;
+        while let Node::Let(l) = &e.node {
+            e = &l.0.value;
+        }
+        e
     }
 
     /// The value when the expression is a constant (no paths, params or inputs), as far as
     /// simple folding goes; `None` otherwise.
     pub fn constant(&self) -> Option<Const> {
         Some(match &self.node {
+            Node::Let(l) => l.0.constant?,
             Node::Number(n) | Node::Duration(n) => Const::Number(*n),
             Node::Bool(b) => Const::Bool(*b),
             Node::Unary { op: UnOp::Neg, arg } => Const::Number(-arg.constant()?.number()?),
@@ -471,7 +523,11 @@ impl Const {
 
 impl Program {
     /// Calls `expr` on every expression node (pre-order) and `action` on every action.
+    /// Each `let`'s value is visited once, first, however many times it is used.
     pub fn visit(&self, expr: &mut dyn FnMut(&Expr), action: &mut dyn FnMut(&Action)) {
+        for l in &self.lets.0 {
+            l.0.value.walk(expr);
+        }
         let b = |x: &Bound, expr: &mut dyn FnMut(&Expr)| x.expr.walk(expr);
         let acts =
             |list: &[Action], expr: &mut dyn FnMut(&Expr), action: &mut dyn FnMut(&Action)| {
@@ -530,7 +586,8 @@ impl Program {
 }
 
 impl Expr {
-    /// Calls `f` on this node and every node below it.
+    /// Calls `f` on this node and every node below it. A `let` use is one node: its value
+    /// is walked once, with the program's `let`s ([`Program::visit`]).
     pub fn walk(&self, f: &mut dyn FnMut(&Expr)) {
         f(self);
         match &self.node {
@@ -557,5 +614,262 @@ impl Expr {
             }),
             _ => {}
         }
+    }
+}
+
+/// A `let`, checked once. Its uses are [`Node::Let`] references to it, so a `let` named by
+/// many others, or a chain of `let`s each naming the one before twice, costs what its
+/// source does. What its uses need of it is computed here once: its constant, the paths
+/// and `let`s it reads, and (when few) every path it reads through them.
+#[derive(Debug)]
+pub struct Let {
+    /// Its number in [`Program::lets`].
+    pub id: u32,
+    pub name: String,
+    pub value: Expr,
+    /// `value.constant()`.
+    pub constant: Option<Const>,
+    /// The paths and `let`s the value names itself, each once, in order of appearance.
+    pub reads: Vec<Read>,
+    /// Every path the value reads, through its `let`s too, when there are at most
+    /// [`Let::LISTED_PATHS`]; `None`: walk `reads`.
+    pub paths: Option<Vec<Path>>,
+    /// A digest of the name, the value and the digests of the `let`s it names: two `let`s
+    /// with equal numbers and digests are equal (see [`LetRef`]'s `PartialEq`).
+    pub digest: u64,
+}
+
+/// A path or a `let` an expression reads.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Read {
+    Path(Path),
+    Let(LetRef),
+}
+
+impl Let {
+    /// A `let` reading at most this many paths lists them all ([`Let::paths`]).
+    pub const LISTED_PATHS: usize = 32;
+
+    /// Checks nothing: `value` is checked. Computes what uses need (see [`Let`]).
+    pub fn shared(id: u32, name: String, value: Expr) -> LetRef {
+        let constant = value.constant();
+        let reads = value.reads();
+        let paths = collect_paths_upto(&reads, Let::LISTED_PATHS);
+        let digest = digest(&name, &value);
+        LetRef(Arc::new(Let { id, name, value, constant, reads, paths, digest }))
+    }
+
+    /// Whether the value is of a type the runtime computes once per evaluation and shares
+    /// (`mocu-lower` makes it a local of the function): a number, duration, bool, string or
+    /// colour. A range, an object or an untyped value is put in place at each use instead
+    /// (its uses decide what it is read as).
+    pub fn is_local(&self) -> bool {
+        matches!(
+            self.value.ty.kind,
+            TypeKind::Number { .. }
+                | TypeKind::Duration
+                | TypeKind::Bool
+                | TypeKind::String
+                | TypeKind::Colour
+        )
+    }
+}
+
+/// Dropping the last use of the end of a chain of `let`s would drop the one before, and so
+/// on, one stack frame each: a `let` being dropped hands the `let`s it names to a list
+/// instead, and those that it held last are taken apart from there.
+impl Drop for Let {
+    fn drop(&mut self) {
+        let mut pending: Vec<LetRef> = lets_of(&mut self.reads);
+        let span = self.value.span;
+        drop(std::mem::replace(&mut self.value, placeholder(span)));
+        while let Some(l) = pending.pop() {
+            if let Ok(mut last) = Arc::try_unwrap(l.0) {
+                pending.extend(lets_of(&mut last.reads));
+                let span = last.value.span;
+                drop(std::mem::replace(&mut last.value, placeholder(span)));
+            }
+        }
+    }
+}
+
+fn lets_of(reads: &mut Vec<Read>) -> Vec<LetRef> {
+    std::mem::take(reads)
+        .into_iter()
+        .filter_map(|r| match r {
+            Read::Let(l) => Some(l),
+            Read::Path(_) => None,
+        })
+        .collect()
+}
+
+fn placeholder(span: Span) -> Expr {
+    Expr { ty: Type::ERROR, node: Node::Bool(false), span }
+}
+
+/// A digest of a `let`'s name and value: every node in pre-order (its type, span, kind,
+/// scalar contents and number of operands), a nested `let` by its number and digest. Walks
+/// with a stack of its own: the checker runs on ordinary threads, and values may be as deep
+/// as the parser allows.
+fn digest(name: &str, value: &Expr) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    name.hash(&mut h);
+    let mut stack = vec![value];
+    while let Some(e) = stack.pop() {
+        // The type is flat: its JSON is short, whatever the expression.
+        serde_json::to_string(&e.ty).unwrap_or_default().hash(&mut h);
+        e.span.hash(&mut h);
+        std::mem::discriminant(&e.node).hash(&mut h);
+        let mut operands: Vec<&Expr> = Vec::new();
+        match &e.node {
+            Node::Number(x) | Node::Duration(x) => x.to_bits().hash(&mut h),
+            Node::Bool(b) => b.hash(&mut h),
+            Node::Str(t) | Node::Param(t) | Node::Size(t) | Node::Input(t) => t.hash(&mut h),
+            Node::Colour(c) => c.hash(&mut h),
+            Node::Path(p) => p.hash(&mut h),
+            Node::Let(l) => (l.0.id, l.0.digest).hash(&mut h),
+            Node::Index => {}
+            Node::RangeEnd { range, max } => {
+                max.hash(&mut h);
+                operands.push(range);
+            }
+            Node::Range { lo, hi } => operands.extend([&**lo, &**hi]),
+            Node::Unary { op, arg } => {
+                format!("{op:?}").hash(&mut h);
+                operands.push(arg);
+            }
+            Node::Binary { op, lhs, rhs } => {
+                format!("{op:?}").hash(&mut h);
+                operands.extend([&**lhs, &**rhs]);
+            }
+            Node::If { cond, then, other } => operands.extend([&**cond, &**then, &**other]),
+            Node::Call { function, args } => {
+                function.hash(&mut h);
+                operands.extend(args);
+            }
+            Node::Format(parts) => {
+                for p in parts {
+                    match p {
+                        FormatPart::Text(t) => t.hash(&mut h),
+                        FormatPart::Value { expr, spec } => {
+                            spec.hash(&mut h);
+                            operands.push(expr);
+                        }
+                    }
+                }
+            }
+        }
+        operands.len().hash(&mut h);
+        stack.extend(operands.into_iter().rev());
+    }
+    h.finish()
+}
+
+/// A shared reference to a [`Let`]. Equal when it is the same `let` or one with the same
+/// number and digest (as after a reload or a bundle round trip); serialized as
+/// `[number, digest]`, so an item's serialization changes when a `let` it reads does.
+#[derive(Clone)]
+pub struct LetRef(pub Arc<Let>);
+
+impl std::ops::Deref for LetRef {
+    type Target = Let;
+    fn deref(&self) -> &Let {
+        &self.0
+    }
+}
+
+impl fmt::Debug for LetRef {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "let#{} {}", self.0.id, self.0.name)
+    }
+}
+
+impl PartialEq for LetRef {
+    fn eq(&self, other: &LetRef) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+            || (self.0.id == other.0.id && self.0.digest == other.0.digest)
+    }
+}
+
+impl Serialize for LetRef {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        (self.0.id, self.0.digest).serialize(s)
+    }
+}
+
+thread_local! {
+    /// The `let`s of the program being deserialized on this thread, so far (see [`Lets`]).
+    static READING: std::cell::RefCell<Vec<LetRef>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+impl<'de> Deserialize<'de> for LetRef {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<LetRef, D::Error> {
+        let (id, digest) = <(u32, u64)>::deserialize(d)?;
+        READING.with(|r| {
+            r.borrow().get(id as usize).filter(|l| l.0.digest == digest).cloned().ok_or_else(|| {
+                serde::de::Error::custom(format!("`let` #{id} is not defined before its use"))
+            })
+        })
+    }
+}
+
+/// The program's `let`s. Serialized as a list of `{name, value}`, each value naming the
+/// `let`s before it by number; deserializing rebuilds them in order (they are read before
+/// the rest of the program, whose uses they resolve; call [`Lets::end_reading`] once a
+/// program is read, to let go of them).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Lets(pub Vec<LetRef>);
+
+impl Lets {
+    /// Forgets the `let`s of the last program deserialized on this thread.
+    pub fn end_reading() {
+        READING.with(|r| r.borrow_mut().clear());
+    }
+}
+
+#[derive(Serialize)]
+struct LetOut<'a> {
+    name: &'a str,
+    value: &'a Expr,
+}
+
+#[derive(Deserialize)]
+struct LetIn {
+    name: String,
+    value: Expr,
+}
+
+impl Serialize for Lets {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let mut seq = s.serialize_seq(Some(self.0.len()))?;
+        for l in &self.0 {
+            seq.serialize_element(&LetOut { name: &l.0.name, value: &l.0.value })?;
+        }
+        seq.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Lets {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Lets, D::Error> {
+        struct Visit;
+        impl<'de> serde::de::Visitor<'de> for Visit {
+            type Value = Lets;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a list of `let`s")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<Lets, A::Error> {
+                READING.with(|r| r.borrow_mut().clear());
+                let mut out = Vec::new();
+                while let Some(w) = seq.next_element::<LetIn>()? {
+                    let l = Let::shared(out.len() as u32, w.name, w.value);
+                    READING.with(|r| r.borrow_mut().push(l.clone()));
+                    out.push(l);
+                }
+                Ok(Lets(out))
+            }
+        }
+        d.deserialize_seq(Visit)
     }
 }

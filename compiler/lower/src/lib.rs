@@ -1,5 +1,8 @@
 //! Lowering: the checked program's typed expressions to the JIT's IR. Every path becomes an
-//! input slot; the list of slots is the expression's subscription set.
+//! input slot; the list of slots is the expression's subscription set. A `let` of a value
+//! type becomes a local of the function, lowered once however many times it is read (and a
+//! widget argument that its siblings name, once per function too); so what is lowered is as
+//! large as the checked program, which is as large as the source.
 //!
 //! Shared by the live layout (`mocu-layout`) and the widget renderer (`mocu-widgets`, which
 //! compiles component bodies), so that neither reaches into the other. [`convert`] turns
@@ -12,8 +15,11 @@
 pub mod convert;
 
 use mocu_jit as jit;
-use mocu_language::program::{Arg, Expr, FormatPart, FormatSpec, Node, Path, PathBase};
+use mocu_language::program::{
+    Arg, Expr, FormatPart, FormatSpec, Let, LetRef, Node, Path, PathBase,
+};
 use mocu_language::types::{Type, TypeKind};
+use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
 
 /// Where a path starts.
@@ -62,13 +68,26 @@ pub enum Scope<'a> {
     Plain,
 }
 
-/// Lowers expressions of one function, collecting its input slots.
+/// Lowers expressions of one function, collecting its input slots and its locals.
 pub struct Lowerer<'a> {
     pub slots: Vec<(Source, jit::Ty)>,
+    /// The function's locals ([`jit::Function::locals`]): the `let`s and sibling arguments
+    /// its expressions read, each lowered once, each after those it reads.
+    pub locals: Vec<jit::Expr>,
+    /// Which local holds a `let` (by address; `held` keeps it alive) or an argument, read
+    /// as a type.
+    local_of: HashMap<(Local, jit::Ty), u32>,
+    held: Vec<LetRef>,
     scope: Scope<'a>,
     /// Screen size, to turn `%` into pixels.
     screen: (f64, f64),
     depth: u32,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+enum Local {
+    Let(*const Let),
+    Arg(String),
 }
 
 /// The JIT type of a checked type, if it has one on its own.
@@ -84,7 +103,85 @@ pub fn value_ty(t: &Type) -> Option<jit::Ty> {
 
 impl<'a> Lowerer<'a> {
     pub fn new(scope: Scope<'a>, screen: (f64, f64)) -> Lowerer<'a> {
-        Lowerer { slots: Vec::new(), scope, screen, depth: 0 }
+        Lowerer {
+            slots: Vec::new(),
+            locals: Vec::new(),
+            local_of: HashMap::new(),
+            held: Vec::new(),
+            scope,
+            screen,
+            depth: 0,
+        }
+    }
+
+    /// The function of `outputs` lowered by this lowerer, and its slots.
+    pub fn finish(self, outputs: Vec<jit::Expr>) -> (jit::Function, Vec<(Source, jit::Ty)>) {
+        let inputs = self.slots.iter().map(|s| s.1).collect();
+        (jit::Function { inputs, locals: self.locals, outputs }, self.slots)
+    }
+
+    fn push_local(&mut self, key: Local, ty: jit::Ty, e: jit::Expr) -> jit::Expr {
+        self.locals.push(e);
+        let i = (self.locals.len() - 1) as u32;
+        self.local_of.insert((key, ty), i);
+        jit::Expr::Local(i, ty)
+    }
+
+    /// A `let` computed once per evaluation ([`Let::is_local`]): its local, lowered now if
+    /// it is not yet, after every local `let` it reads (found without recursion, deepest
+    /// first, and each lowered out of line at depth 0: a chain of 50,000 `let`s is lowered
+    /// 50,000 times one level deep, not once 50,000 levels deep).
+    fn let_local(&mut self, l: &LetRef) -> Result<jit::Expr, LowerError> {
+        let ty = |l: &Let| value_ty(&l.value.ty).unwrap_or(jit::Ty::Num);
+        if let Some(i) = self.local_of.get(&(Local::Let(Arc::as_ptr(&l.0)), ty(l))) {
+            return Ok(jit::Expr::Local(*i, ty(l)));
+        }
+        for dep in self.unlowered_lets(l) {
+            let t = ty(&dep);
+            let saved = std::mem::replace(&mut self.depth, 0);
+            let e = self.lower(&dep.value, t);
+            self.depth = saved;
+            let e = e?;
+            self.push_local(Local::Let(Arc::as_ptr(&dep.0)), t, e);
+            self.held.push(dep);
+        }
+        Ok(jit::Expr::Local(self.local_of[&(Local::Let(Arc::as_ptr(&l.0)), ty(l))], ty(l)))
+    }
+
+    /// The local `let`s that `l` reads (through any `let`), `l` last, not yet lowered, each
+    /// after those it reads. Iterative depth-first search.
+    fn unlowered_lets(&self, l: &LetRef) -> Vec<LetRef> {
+        let lowered = |x: &Let| {
+            let t = value_ty(&x.value.ty).unwrap_or(jit::Ty::Num);
+            self.local_of.contains_key(&(Local::Let(x as *const Let), t))
+        };
+        let mut order = Vec::new();
+        let mut seen: HashSet<*const Let> = HashSet::new();
+        seen.insert(Arc::as_ptr(&l.0));
+        let mut stack: Vec<(LetRef, usize)> = vec![(l.clone(), 0)];
+        while let Some((cur, i)) = stack.pop() {
+            let next = cur.reads[i..].iter().position(|r| {
+                matches!(r, mocu_language::program::Read::Let(d)
+                    if !seen.contains(&Arc::as_ptr(&d.0)) && !lowered(d))
+            });
+            match next {
+                Some(k) => {
+                    let mocu_language::program::Read::Let(d) = &cur.reads[i + k] else {
+                        unreachable!("position found a let")
+                    };
+                    let d = d.clone();
+                    seen.insert(Arc::as_ptr(&d.0));
+                    stack.push((cur, i + k + 1));
+                    stack.push((d, 0));
+                }
+                None => {
+                    if cur.is_local() {
+                        order.push(cur);
+                    }
+                }
+            }
+        }
+        order
     }
 
     fn slot(&mut self, source: Source, ty: jit::Ty) -> jit::Expr {
@@ -137,11 +234,21 @@ impl<'a> Lowerer<'a> {
                 let source = self.path_source(p)?;
                 self.slot(source, ty)
             }
+            Node::Let(l) if l.is_local() => self.let_local(l)?,
+            // Put in place (its uses decide what it is read as).
+            Node::Let(l) => self.lower(&l.value, ty)?,
             Node::Param(name) => match &self.scope {
                 Scope::Widget { args, .. } => match args.iter().find(|a| &a.name == name) {
                     Some(a) => {
+                        // A sibling argument: lowered once per function and type, in place
+                        // (its depth counts where it is read, as `check_depth` counts it).
+                        let key = (Local::Arg(name.clone()), ty);
+                        if let Some(i) = self.local_of.get(&key) {
+                            return Ok(jit::Expr::Local(*i, ty));
+                        }
                         let arg = a.value.expr.clone();
-                        self.lower(&arg, ty)?
+                        let e = self.lower(&arg, ty)?;
+                        self.push_local(key.0, ty, e)
                     }
                     None => jit::Expr::Absent(ty),
                 },
@@ -212,7 +319,7 @@ impl<'a> Lowerer<'a> {
     }
 
     fn range_end(&mut self, range: &Expr, max: bool) -> Result<jit::Expr, LowerError> {
-        match &range.node {
+        match &range.peel().node {
             Node::Range { lo, hi } => self.lower(if max { hi } else { lo }, jit::Ty::Num),
             Node::Binary { op: mocu_language::ast::BinOp::Range, lhs, rhs } => {
                 self.lower(if max { rhs } else { lhs }, jit::Ty::Num)

@@ -115,17 +115,16 @@ fn compile_component(c: &Component, index: usize) -> Result<(jit::Function, Comp
         }
         shapes.push(ShapeOut { kind: s.kind.clone(), first, args: s.args.len(), styles });
     }
-    let slots: Vec<(String, jit::Ty)> = lw
-        .slots
+    let (function, sources) = lw.finish(outs);
+    let slots: Vec<(String, jit::Ty)> = sources
         .iter()
         .map(|(src, ty)| match src {
             Source::Param(n) => (n.clone(), *ty),
             other => (format!("{other:?}"), *ty),
         })
         .collect();
-    let inputs = lw.slots.iter().map(|s| s.1).collect();
     Ok((
-        jit::Function { inputs, outputs: outs },
+        function,
         Compiled {
             name: c.name.clone(),
             func: index,

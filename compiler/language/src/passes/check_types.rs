@@ -1,5 +1,9 @@
 //! Pass 4: types, and lowering to the checked [`Program`]. Every expression gets a
-//! [`Type`]; lets are inlined; paths are typed from the schema when one covers them.
+//! [`Type`]; paths are typed from the schema when one covers them. A `let` is checked once,
+//! where it is defined, and becomes a [`Let`] of the program that its uses refer to
+//! (`Node::Let`); one whose value is a path or a constant is copied into its uses instead,
+//! where paths are extended (`v.nav.speed`) and constants folded. So checking is linear in
+//! the source, however the `let`s name one another.
 //! Reports a non-number used as a number (E0301), other mismatches (E0302), argument counts
 //! (E0303), non-boolean conditions (E0304), unknown type names (E0305), misplaced method
 //! calls (E0306), bad format specs (E0307), `set` of a non-path (E0308), unknown primitives
@@ -9,7 +13,6 @@
 //! becomes the `{error}` type, which is accepted everywhere (no cascades).
 
 use super::check_durations::Use;
-use super::let_size::{SizeGuard, Verdict};
 use super::{DefId, Definitions, ModuleId, Modules, component_item, let_item};
 use crate::ast::{self, BinOp, ExprKind, Item, LitUnit, StrPart, UnOp};
 use crate::builtins::{self, Returns};
@@ -36,7 +39,8 @@ pub fn check_types(
         schema,
         diags,
         top_lets: HashMap::new(),
-        size: SizeGuard::default(),
+        lets_lowered: vec![0; modules.len()],
+        lets: Vec::new(),
         program: Program::default(),
         mode_refs: Vec::new(),
     };
@@ -45,6 +49,7 @@ pub fn check_types(
         t.module(m);
     }
     t.check_modes();
+    t.program.lets = Lets(t.lets);
     t.program
 }
 
@@ -52,18 +57,15 @@ pub fn check_types(
 struct Scope {
     module: ModuleId,
     limit: Option<usize>,
-    /// Names in scope with their values and the values' expanded sizes (`let_size`).
-    locals: Vec<(String, Expr, usize)>,
+    /// Names in scope with their values (a `let`'s: what its uses get, see `bind_let`).
+    locals: Vec<(String, Expr)>,
     self_type: Option<Option<String>>,
 }
 
 impl Scope {
     fn with(&self, name: &str, e: Expr) -> Scope {
-        self.with_sized(name, e, 1)
-    }
-    fn with_sized(&self, name: &str, e: Expr, size: usize) -> Scope {
         let mut s = self.clone();
-        s.locals.push((name.to_string(), e, size));
+        s.locals.push((name.to_string(), e));
         s
     }
 }
@@ -73,9 +75,12 @@ struct Typer<'a, 'd> {
     defs: &'a Definitions,
     schema: &'a Schema,
     diags: &'d mut Diagnostics,
-    /// Top-level `let` values, lowered once, with their expanded sizes.
-    top_lets: HashMap<DefId, (Expr, usize)>,
-    size: SizeGuard,
+    /// Top-level `let`s, each checked once: what their uses get (see `bind_let`).
+    top_lets: HashMap<DefId, Expr>,
+    /// Per module, how many of its items have had their `let`s checked (in order).
+    lets_lowered: Vec<usize>,
+    /// The program's `let`s so far.
+    lets: Vec<LetRef>,
     program: Program,
     /// `mode NAME` actions, checked against the declared modes at the end (E0212).
     mode_refs: Vec<(String, Span)>,
@@ -104,7 +109,7 @@ impl Typer<'_, '_> {
         let mut sink = Sink::default();
         for (i, item) in self.modules[m].ast.items.iter().enumerate() {
             if let Item::Let(_) = item {
-                // Lowered (and so checked) even when unused; uses reuse this result.
+                // Checked even when unused; uses refer to this result.
                 self.lower_top_let(DefId { module: m, item: i, inner: None });
             }
             self.item(item, &base, &mut sink);
@@ -265,7 +270,8 @@ impl Typer<'_, '_> {
                 for it in &e.items {
                     if let Item::Let(l) = it {
                         let v = self.lower(&l.value, &s);
-                        s = s.with_sized(&l.name.name, v, self.size.last());
+                        let v = self.bind_let(&l.name.name, v);
+                        s.locals.push((l.name.name.clone(), v));
                     } else {
                         self.item(it, &s, &mut inner);
                     }
@@ -423,13 +429,15 @@ impl Typer<'_, '_> {
             schema: self.schema,
             diags: &mut scratch,
             top_lets: std::mem::take(&mut self.top_lets),
-            size: std::mem::take(&mut self.size),
+            lets_lowered: std::mem::take(&mut self.lets_lowered),
+            lets: std::mem::take(&mut self.lets),
             program: Program::default(),
             mode_refs: Vec::new(),
         };
         let r = f(&mut t);
         self.top_lets = t.top_lets;
-        self.size = t.size;
+        self.lets_lowered = t.lets_lowered;
+        self.lets = t.lets;
         r
     }
 
@@ -517,7 +525,8 @@ impl Typer<'_, '_> {
             match stmt {
                 ast::Stmt::Let(l) => {
                     let v = self.lower(&l.value, &s);
-                    s = s.with_sized(&l.name.name, v, self.size.last());
+                    let v = self.bind_let(&l.name.name, v);
+                    s.locals.push((l.name.name.clone(), v));
                 }
                 ast::Stmt::Primitive(p) => {
                     if let Some(shape) = self.primitive(p, &s) {
@@ -851,30 +860,57 @@ impl Typer<'_, '_> {
         }
     }
 
-    /// Lowers a top-level `let` once (its expression is checked there); `None` if `id` is
-    /// not a `let`.
-    fn lower_top_let(&mut self, id: DefId) -> Option<()> {
-        if !self.top_lets.contains_key(&id) {
-            let l = let_item(self.modules, id)?;
-            let scope = Scope { module: id.module, limit: Some(id.item), ..Scope::default() };
-            let saved = self.size.set_aside();
-            let e = self.lower(&l.value, &scope);
-            let size = self.size.restore(saved);
-            self.top_lets.insert(id, (e, size));
+    /// Checks a top-level `let` once, and before it the module's `let`s above it (those it
+    /// may name), in order: naming a `let` of another module checks that module's `let`s up
+    /// to it, so recursion through `let`s goes as deep as the chain of modules, not as the
+    /// chain of `let`s. `None` if `id` is not a `let`, or is being checked (a `use` cycle).
+    fn lower_top_let(&mut self, id: DefId) -> Option<Expr> {
+        while self.lets_lowered[id.module] <= id.item {
+            let item = self.lets_lowered[id.module];
+            self.lets_lowered[id.module] += 1;
+            let at = DefId { module: id.module, item, inner: None };
+            if let Some(l) = let_item(self.modules, at) {
+                let scope = Scope { module: id.module, limit: Some(item), ..Scope::default() };
+                let v = self.lower(&l.value, &scope);
+                let v = self.bind_let(&l.name.name, v);
+                self.top_lets.insert(at, v);
+            }
         }
-        Some(())
+        self.top_lets.get(&id).cloned()
     }
 
-    /// A top-level `let`'s value where it is used (`span`): `{error}` when copying it would
-    /// take the expression over the size bounds (`let_size`).
+    /// What the uses of a `let` with this checked value get: a path or a constant is copied
+    /// (paths are extended and constants folded where they are used; copying them costs
+    /// what their source does); anything else becomes a [`Let`] of the program, checked
+    /// once and referred to by every use.
+    fn bind_let(&mut self, name: &str, value: Expr) -> Expr {
+        let copied = match &value.node {
+            Node::Number(_)
+            | Node::Bool(_)
+            | Node::Colour(_)
+            | Node::Duration(_)
+            | Node::Path(_)
+            | Node::Param(_)
+            | Node::Size(_)
+            | Node::Input(_)
+            | Node::Index
+            | Node::Let(_) => true,
+            Node::Str(s) => s.len() <= 64,
+            _ => false,
+        };
+        if copied {
+            return value;
+        }
+        let (ty, span) = (value.ty.clone(), value.span);
+        let l = Let::shared(self.lets.len() as u32, name.to_string(), value);
+        self.lets.push(l.clone());
+        mk(ty, Node::Let(l), span)
+    }
+
+    /// A top-level `let` where it is used (`span`).
     fn top_let(&mut self, id: DefId, span: Span) -> Option<Expr> {
-        self.lower_top_let(id)?;
-        let (e, size) = &self.top_lets[&id];
-        Some(if self.size.use_let(*size) {
-            Expr { span, ..e.clone() }
-        } else {
-            mk(Type::ERROR, Node::Bool(false), span)
-        })
+        let e = self.lower_top_let(id)?;
+        Some(Expr { span, ..e })
     }
 
     fn path_type(&self, p: &Path) -> Type {
@@ -892,15 +928,8 @@ impl Typer<'_, '_> {
         }
     }
 
-    /// Lowers `e`, counting its nodes with `let`s put in place (`let_size`): an expression
-    /// over the bounds is reported and becomes `{error}`.
     fn lower(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
-        self.size.enter();
-        let out = self.lower_node(e, scope);
-        match self.size.leave(e.span, self.diags) {
-            Verdict::Keep(_) => out,
-            Verdict::Refuse => mk(Type::ERROR, Node::Bool(false), e.span),
-        }
+        self.lower_node(e, scope)
     }
 
     fn lower_node(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
@@ -938,12 +967,7 @@ impl Typer<'_, '_> {
                 None => mk(Type::ERROR, Node::Bool(false), span),
             },
             ExprKind::Name(n) => {
-                if let Some((_, local, size)) =
-                    scope.locals.iter().rev().find(|(name, _, _)| name == n)
-                {
-                    if !self.size.use_let(*size) {
-                        return mk(Type::ERROR, Node::Bool(false), span);
-                    }
+                if let Some((_, local)) = scope.locals.iter().rev().find(|(name, _)| name == n) {
                     return Expr { span, ..local.clone() };
                 }
                 if let Some(id) = self.defs.find_let(self.modules, scope.module, n, scope.limit)
@@ -977,7 +1001,7 @@ impl Typer<'_, '_> {
             }
             ExprKind::Field(base, field) => {
                 if let ExprKind::Name(ns) = &base.kind {
-                    let shadowed = scope.locals.iter().any(|(n, _, _)| n == ns)
+                    let shadowed = scope.locals.iter().any(|(n, _)| n == ns)
                         || self
                             .defs
                             .find_let(self.modules, scope.module, ns, scope.limit)
@@ -1099,8 +1123,7 @@ impl Typer<'_, '_> {
                         self.diags,
                     );
                 }
-                // An unknown member is reported here, where the segment's own span is known
-                // (lets are inlined later, at their uses).
+                // An unknown member is reported here, where the segment's own span is known.
                 if let Lookup::Unknown { object_type, index, candidates } =
                     self.schema.lookup(p.base_type.as_deref(), from_root, &p.segments)
                     && index + 1 == p.segments.len()

@@ -9,7 +9,6 @@ pub mod check_paths;
 pub mod check_schema;
 pub mod check_types;
 pub mod collect_definitions;
-pub mod let_size;
 pub mod load_sources;
 pub mod resolve_names;
 pub mod warn_constant_watch;

@@ -100,9 +100,9 @@ impl Builder {
     }
 
     pub(crate) fn add(&mut self, lw: Lowerer, outputs: Vec<jit::Expr>) -> FnRef {
-        let inputs = lw.slots.iter().map(|s| s.1).collect();
-        self.functions.push(jit::Function { inputs, outputs });
-        self.infos.push(FuncInfo { slots: lw.slots });
+        let (f, slots) = lw.finish(outputs);
+        self.functions.push(f);
+        self.infos.push(FuncInfo { slots });
         FnRef { code: self.code.clone(), index: self.functions.len() - 1 }
     }
 
