@@ -11,6 +11,9 @@ use mocu_host::world::{self, RouteFrame, boolean, float, float_in, int, string};
 use std::net::SocketAddr;
 use std::time::Instant;
 
+/// The heartbeat rate the MAVLink spec asks of every system (Hz).
+const HEARTBEAT_HZ: f64 = 1.0;
+
 pub(crate) struct Pending {
     pub id: u64,
     pub command: MavCmd,
@@ -129,12 +132,14 @@ impl Link {
                     float_in("fraction", 0.0, 1.0).describe("battery remaining, 0..1"),
                 ),
                 ("battery_v", Value::Float(0.0), float("V")),
-                ("armed", Value::Bool(false), boolean()),
-                ("engine", Value::Bool(false), boolean()),
+                // Written at each heartbeat (1 Hz by the MAVLink spec): a display takes them as
+                // stale after three missed ones (`PropMeta::rate_hz`, docs/display.md).
+                ("armed", Value::Bool(false), boolean().rate(HEARTBEAT_HZ)),
+                ("engine", Value::Bool(false), boolean().rate(HEARTBEAT_HZ)),
                 (
                     "link",
                     Value::Float(1.0),
-                    float_in("fraction", 0.0, 1.0).describe("link quality"),
+                    float_in("fraction", 0.0, 1.0).describe("link quality").rate(HEARTBEAT_HZ),
                 ),
                 ("link_lost", Value::Bool(false), boolean()),
                 ("stale", Value::Bool(false), boolean()),
@@ -144,8 +149,8 @@ impl Link {
                     boolean()
                         .describe("its address proved itself: commands and heartbeats go to it"),
                 ),
-                ("mode", Value::str(""), string()),
-                ("system_status", Value::str(""), string()),
+                ("mode", Value::str(""), string().rate(HEARTBEAT_HZ)),
+                ("system_status", Value::str(""), string().rate(HEARTBEAT_HZ)),
                 ("system_status_raw", raw(hb.system_status.raw), int("").describe("MAV_STATE")),
                 ("control", Value::str(""), string()),
                 ("drop_rate", Value::Float(0.0), float_in("fraction", 0.0, 1.0)),

@@ -360,3 +360,19 @@ fn a_command_acknowledged_with_a_result_newer_than_the_dialect_is_refused_with_i
     assert_eq!(call.join().unwrap(), CallOutcome::Refused("MAV_RESULT unknown(99)".into()));
     assert_eq!(w.status("malformed"), 0);
 }
+
+/// What each heartbeat writes declares the heartbeat's rate (1 Hz), so that a display takes
+/// it as stale after three missed heartbeats; telemetry whose rate the vehicle chooses
+/// declares none.
+#[test]
+fn heartbeat_properties_declare_one_hertz_and_telemetry_declares_no_rate() {
+    let w = world(LinkConfig::default(), None);
+    w.link.ingest(&quad(7, 0), None);
+    let v = w.vehicle("mav7");
+    for p in ["armed", "engine", "mode", "system_status", "link"] {
+        assert_eq!(w.ds.meta(v, p).unwrap().rate_hz, Some(1.0), "{p}");
+    }
+    assert_eq!(w.ds.meta(v, "fuel").unwrap().rate_hz, None);
+    let nav = w.ds.resolve(&["vehicles", "mav7", "nav"]).unwrap();
+    assert_eq!(w.ds.meta(nav, "heading").unwrap().rate_hz, None);
+}
