@@ -232,5 +232,65 @@ fn bench<M: Measurement>(c: &mut Criterion<M>) {
             assert!(!st.drawn);
         })
     });
+
+    // A 640x480 camera frame scaled to the whole frame (a full-window video): the
+    // fixed-point resampler, and tiny-skia's bilinear pattern pipeline (forced by a skew
+    // of 1e-30, which no longer counts as axis-aligned).
+    let img = video_frame();
+    let size = Size::new(W as f32, H as f32);
+    let mut canvas = SkiaCanvas::new(s.display.read_frame(), (0, 0), size);
+    for (name, skew) in [("image_640x480_to_1920x1080", 0.0), ("image_pattern_path", 1e-30)] {
+        g.bench_function(name, |b| b.iter(|| draw_video(&mut canvas, &img, skew)));
+    }
     g.finish();
+    image_ratios(&mut canvas, &img);
+}
+
+/// A 640x480 opaque test pattern.
+fn video_frame() -> Image {
+    let rgb: Vec<u8> = (0..640 * 480 * 3).map(|i| (i * 7 % 251) as u8).collect();
+    Image::from_rgb8(640, 480, &rgb).expect("sizes match")
+}
+
+/// The image drawn over the whole canvas (sheared by `skew`).
+fn draw_video(c: &mut SkiaCanvas, img: &Image, skew: f32) {
+    c.save();
+    c.transform(Transform { kx: skew, ..Transform::IDENTITY });
+    c.draw_image(img, Rect::new(0.0, 0.0, W as f32, H as f32), ImageFit::Stretch, 1.0);
+    c.restore();
+    black_box(&*c);
+}
+
+/// The image draws as multiples of the memcpy, interleaved (medians of 15).
+fn image_ratios(canvas: &mut SkiaCanvas, img: &Image) {
+    let src = vec![7u8; (W * H * 4) as usize];
+    let mut dst = vec![0u8; (W * H * 4) as usize];
+    let mut samples = [const { Vec::new() }; 3];
+    for _ in 0..15 {
+        let t = wall_ns();
+        dst.copy_from_slice(black_box(&src));
+        black_box(&dst);
+        let t1 = wall_ns();
+        draw_video(canvas, img, 0.0);
+        let t2 = wall_ns();
+        draw_video(canvas, img, 1e-30);
+        let t3 = wall_ns();
+        for (v, d) in samples.iter_mut().zip([t1 - t, t2 - t1, t3 - t2]) {
+            v.push(d as f64);
+        }
+    }
+    let [memcpy, fast, pattern] = samples.map(|mut v| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    });
+    println!(
+        "image 640x480 -> 1920x1080 (wall, medians of 15): memcpy_8MB {:.3} ms = 1; \
+         resampler {:.2} ms = {:.1}x; tiny-skia pattern {:.2} ms = {:.1}x ({:.1}x the resampler)",
+        memcpy / 1e6,
+        fast / 1e6,
+        fast / memcpy,
+        pattern / 1e6,
+        pattern / memcpy,
+        pattern / fast,
+    );
 }
