@@ -815,6 +815,9 @@ impl Typer<'_, '_> {
         if want.kind == TypeKind::String && b.ty.is_numeric() {
             d.help("to show a number as text, interpolate it: \"{x}\"");
         }
+        if matches!(want.kind, TypeKind::Range { .. }) && b.ty.is_numeric() {
+            d.help("a range is written MIN `..` MAX: `range 0 .. 40`");
+        }
     }
 
     fn not_a_number(&mut self, b: &Expr, what: &str) {
