@@ -7,6 +7,7 @@
 //! formula `dst = src + dst * (1 - src.a)`.
 
 use crate::color::Color;
+use multiversion::multiversion;
 
 /// `x / 255`, rounded to nearest, for `x` in `0..=65535`.
 #[inline(always)]
@@ -100,7 +101,9 @@ fn mul255(a: u16, b: u16) -> u16 {
 }
 
 /// Source-over of one premultiplied colour onto a run of pixels (a shape's solid
-/// interior): a fill when opaque.
+/// interior): a fill when opaque. Compiled for AVX2 too (twice the 16-bit lanes), picked
+/// at run time.
+#[multiversion(targets("x86_64+avx2"))]
 pub fn blend_span(dst: &mut [[u8; 4]], src: [u8; 4]) {
     if src[3] == 255 {
         dst.fill(src);
@@ -123,11 +126,13 @@ pub fn blend_span(dst: &mut [[u8; 4]], src: [u8; 4]) {
 }
 
 /// Source-over of one premultiplied colour under per-pixel coverage (`mask[i]` for
-/// `dst[i]`, 0..=255): a row of a glyph run.
+/// `dst[i]`, 0..=255): a row of a glyph run or of a cached shape's mask. Compiled for
+/// AVX2 too, picked at run time.
+#[multiversion(targets("x86_64+avx2"))]
 pub fn cover_row(dst: &mut [[u8; 4]], src: [u8; 4], mask: &[u8]) {
     let n = dst.len().min(mask.len());
     let (dst, mask) = (&mut dst[..n], &mask[..n]);
-    let sv: [u16; 32] = std::array::from_fn(|i| src[i % 4] as u16);
+    let s = u32::from_le_bytes(src);
     let mut d8 = dst.chunks_exact_mut(8);
     let mut m8 = mask.chunks_exact(8);
     for (d, m) in (&mut d8).zip(&mut m8) {
@@ -140,13 +145,10 @@ pub fn cover_row(dst: &mut [[u8; 4]], src: [u8; 4], mask: &[u8]) {
             d.fill(src);
             continue;
         }
-        let d = d.as_flattened_mut();
-        let mut c = [0u16; 32];
-        for i in 0..32 {
-            c[i] = mul255(sv[i], m[i / 4] as u16);
-        }
-        for i in 0..32 {
-            d[i] = (c[i] + mul255(d[i] as u16, 255 - c[i | 3])) as u8;
+        // Two channels a multiply in 32-bit lanes (the 16-bit form's broadcasts of each
+        // pixel's coverage and alpha cost more than its multiplies save under AVX2).
+        for (d, k) in d.iter_mut().zip(m) {
+            *d = over_pair(s, u32::from_le_bytes(*d), *k as u32).to_le_bytes();
         }
     }
     for (d, k) in d8.into_remainder().iter_mut().zip(m8.remainder()) {
@@ -156,6 +158,9 @@ pub fn cover_row(dst: &mut [[u8; 4]], src: [u8; 4], mask: &[u8]) {
 
 /// `dst = src * opacity + dst * (1 - src.a * opacity)` over one row of premultiplied
 /// pixels. Fast paths: transparent source pixels are skipped, opaque ones copied.
+/// Compiled for AVX2 too (its 32-bit vector multiplies more than double the blend's
+/// speed), picked at run time.
+#[multiversion(targets("x86_64+avx2"))]
 pub fn blend_row(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
     // Layers are mostly fully transparent (a HUD) or fully opaque (a chart, video): whole
     // runs of 8 pixels are skipped, or copied when the layer is opaque too, without
@@ -239,6 +244,30 @@ mod tests {
     fn div255_rounds_to_nearest_over_the_whole_range() {
         for x in 0..=65535u32 {
             assert_eq!(div255(x), (x as f64 / 255.0).round() as u32, "x = {x}");
+        }
+    }
+
+    #[test]
+    fn two_channels_a_multiply_equal_one_channel_a_multiply_over_the_whole_range() {
+        for x in 0..=255u32 {
+            for m in 0..=255u32 {
+                let one = mul255(x as u16, m as u16) as u32;
+                assert_eq!(mul255_pair(x | (x << 16), m), one | (one << 16), "{x} * {m}");
+            }
+        }
+    }
+
+    #[test]
+    fn over_of_the_colour_scaled_by_a_coverage_equals_over_coverage_for_every_coverage() {
+        for d in SAMPLES {
+            for s in SAMPLES {
+                for k in 0..=255u8 {
+                    let (mut got, mut want) = (d, d);
+                    over(&mut got, scale(s, k));
+                    over_coverage(&mut want, s, k);
+                    assert_eq!(got, want, "d={d:?} s={s:?} k={k}");
+                }
+            }
         }
     }
 

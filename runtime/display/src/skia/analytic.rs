@@ -284,7 +284,16 @@ impl SkiaCanvas {
             let kx = fx.as_ref().map(|fx: &Vec<f32>| {
                 fx.iter().map(|k| (k * 255.0 + 0.5) as u8).collect::<Vec<u8>>()
             });
-            prepared.push(Seg { a, ux, uy, len, bbox, fx, kx });
+            // A narrow one (a vertical line) as its few covered columns' colours: a
+            // call of the row kernel costs more than blending two pixels.
+            let sk = kx.as_ref().and_then(|kx| {
+                let first = kx.iter().position(|k| *k != 0)?;
+                let end = kx.len() - kx.iter().rev().position(|k| *k != 0)?;
+                (end - first <= 8).then(|| {
+                    (first, kx[first..end].iter().map(|k| pixel::scale(pre, *k)).collect())
+                })
+            });
+            prepared.push(Seg { a, ux, uy, len, bbox, fx, kx, sk });
         }
         let Some(top) = prepared.iter().map(|g| g.bbox.y).min() else { return Some(()) };
         let bottom = prepared.iter().map(|g| g.bbox.bottom()).max().unwrap_or(top);
@@ -304,6 +313,14 @@ impl SkiaCanvas {
                         continue;
                     }
                     let row = &mut row[g.bbox.x as usize..][..fx.len()];
+                    if fy == 1.0
+                        && let Some((first, sk)) = &g.sk
+                    {
+                        // Wholly crossed, narrow: `over` of each column's colour under
+                        // its coverage is `over_coverage` of the colour.
+                        row[*first..].iter_mut().zip(sk).for_each(|(d, s)| pixel::over(d, *s));
+                        continue;
+                    }
                     if fy == 1.0
                         && let Some(kx) = &g.kx
                     {
@@ -368,6 +385,9 @@ struct Seg {
     bbox: IRect,
     fx: Option<Vec<f32>>,
     kx: Option<Vec<u8>>,
+    /// For a narrow one: the first covered column (from `bbox.x`) and the colour under
+    /// each covered column's coverage.
+    sk: Option<(usize, Vec<[u8; 4]>)>,
 }
 
 /// The pixels a disc of radius `ro` around `c` may touch (one pixel of anti-aliasing
