@@ -13,6 +13,7 @@ use crate::tiles::Tiles;
 
 mod analytic;
 mod masks;
+mod resample;
 use tiny_skia::{FillRule, Mask, Paint, Pixmap};
 
 #[derive(Clone, Copy, Debug)]
@@ -280,6 +281,49 @@ impl SkiaCanvas {
         true
     }
 
+    /// An image draw under a scale-and-translate transform: [`resample`]'s fixed-point
+    /// bilinear resampler instead of tiny-skia's float pattern pipeline. `r` is where the
+    /// whole image lands, `shown` the part painted (user space). Returns false when the
+    /// case does not apply (rotation, skew, a mirroring scale).
+    fn fast_image(&mut self, image: &Image, r: Rect, shown: Rect, opacity: f32) -> bool {
+        let t = self.state.transform;
+        if !t.is_axis_aligned() || t.sx <= 0.0 || t.sy <= 0.0 || r.w <= 0.0 || r.h <= 0.0 {
+            return false;
+        }
+        // Window coordinates (not the pixmap's): a damage repaint samples where a full
+        // repaint does.
+        let w = t.map_rect(shown);
+        let area = IRect::covering(w)
+            .offset(-self.origin.0, -self.origin.1)
+            .intersect(&self.state.clip)
+            .intersect(&self.full());
+        if area.is_empty() {
+            return true;
+        }
+        self.ready();
+        self.touch(area);
+        let (iw, ih) = (image.width(), image.height());
+        let ax = resample::Axis {
+            scale: t.sx as f64 * r.w as f64 / iw as f64,
+            offset: t.sx as f64 * r.x as f64 + t.tx as f64,
+            lo: w.x as f64,
+            hi: w.right() as f64,
+        };
+        let ay = resample::Axis {
+            scale: t.sy as f64 * r.h as f64 / ih as f64,
+            offset: t.sy as f64 * r.y as f64 + t.ty as f64,
+            lo: w.y as f64,
+            hi: w.bottom() as f64,
+        };
+        let (src, _) = image.pixmap.data().as_chunks::<4>();
+        let src = resample::Source { px: src, width: iw, height: ih };
+        let o = (opacity.clamp(0.0, 1.0) * 255.0).round() as u8;
+        let pw = self.pixmap.width() as usize;
+        let (dst, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+        resample::draw(dst, pw, self.origin, area, &src, ax, ay, o);
+        true
+    }
+
     /// Draws a shaped run with its top-left corner at pixmap pixel `(ox, oy)`: the run's
     /// cached coverage mask blended in one pass (glyph by glyph only for colour glyphs).
     ///
@@ -538,6 +582,9 @@ impl Canvas for SkiaCanvas {
         let r = fit_rect(img, dst, fit);
         let shown = r.intersect(&dst);
         if shown.is_empty() || !self.visible(shown, 0.0) {
+            return;
+        }
+        if self.fast_image(image, r, shown, opacity) {
             return;
         }
         let pattern_t =
