@@ -661,8 +661,9 @@ impl Let {
 
     /// Whether the value is of a type the runtime computes once per evaluation and shares
     /// (`mocu-lower` makes it a local of the function): a number, duration, bool, string or
-    /// colour. A range, an object or an untyped value is put in place at each use instead
-    /// (its uses decide what it is read as).
+    /// colour, lowered ahead of its uses. A range, an object or an untyped value is lowered
+    /// where it is first read instead (its uses decide what it is read as), and its depth
+    /// counts there (`check_depth`).
     pub fn is_local(&self) -> bool {
         matches!(
             self.value.ty.kind,

@@ -1,8 +1,8 @@
 //! Lowering: the checked program's typed expressions to the JIT's IR. Every path becomes an
-//! input slot; the list of slots is the expression's subscription set. A `let` of a value
-//! type becomes a local of the function, lowered once however many times it is read (and a
-//! widget argument that its siblings name, once per function too); so what is lowered is as
-//! large as the checked program, which is as large as the source.
+//! input slot; the list of slots is the expression's subscription set. A `let` becomes a
+//! local of the function, lowered once however many times it is read (an untyped one once
+//! per type it is read as; a widget argument that its siblings name, once per function too);
+//! so what is lowered is as large as the checked program, which is as large as the source.
 //!
 //! Shared by the live layout (`mocu-layout`) and the widget renderer (`mocu-widgets`, which
 //! compiles component bodies), so that neither reaches into the other. [`convert`] turns
@@ -235,8 +235,17 @@ impl<'a> Lowerer<'a> {
                 self.slot(source, ty)
             }
             Node::Let(l) if l.is_local() => self.let_local(l)?,
-            // Put in place (its uses decide what it is read as).
-            Node::Let(l) => self.lower(&l.value, ty)?,
+            // Its uses decide what it is read as: lowered where it is first read as `ty`
+            // (its depth counts there, as `check_depth` counts it), then shared as a local.
+            Node::Let(l) => {
+                let key = (Local::Let(Arc::as_ptr(&l.0)), ty);
+                if let Some(i) = self.local_of.get(&key) {
+                    return Ok(jit::Expr::Local(*i, ty));
+                }
+                let e = self.lower(&l.value, ty)?;
+                self.held.push(l.clone());
+                self.push_local(key.0, ty, e)
+            }
             Node::Param(name) => match &self.scope {
                 Scope::Widget { args, .. } => match args.iter().find(|a| &a.name == name) {
                     Some(a) => {

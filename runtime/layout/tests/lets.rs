@@ -79,3 +79,12 @@ fn twenty_and_sixty_doubling_lets_check_load_and_compute_their_value() {
         assert_eq!(shown(&doubling(n), 3.0), vec![want.clone(), want], "{n} doubling lets");
     }
 }
+
+#[test]
+fn forty_doubling_untyped_lets_are_lowered_once_each() {
+    // Without a schema `??` of paths is untyped: its uses decide what it is read as, so it
+    // is lowered where first read, then shared (not 2^40 copies).
+    let lets: String = (1..=40).map(|i| format!("let a{i} = a{0} ?? a{0}\n", i - 1)).collect();
+    let want = Value::str("7.5");
+    assert_eq!(shown(&layout(&lets, "a40"), 7.5), vec![want.clone(), want]);
+}
