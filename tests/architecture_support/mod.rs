@@ -154,7 +154,13 @@ pub fn rust_files() -> Vec<SourceFile> {
             let path = e.path();
             let name = e.file_name().to_string_lossy().to_string();
             if path.is_dir() {
-                let skip = name.starts_with('.') || name == "target" || name == "node_modules";
+                // vendor/ holds third-party code (patched crates, see vendor/*/PATCHED.md): it
+                // is not held to our rules.
+                let third_party = dir == root && name == "vendor";
+                let skip = name.starts_with('.')
+                    || name == "target"
+                    || name == "node_modules"
+                    || third_party;
                 if !skip {
                     todo.push(path);
                 }

@@ -93,6 +93,12 @@ impl Decoder {
         self.h264.recoveries
     }
 
+    /// H.264 pictures that openh264's error concealment completed (lost slices or
+    /// references); they are among the frames decoded.
+    pub fn concealed(&self) -> u64 {
+        self.h264.concealed
+    }
+
     /// Decodes one unit within the default limits (see [`Decoder::decode_limited`]).
     pub fn decode(&mut self, codec: Codec, data: &[u8]) -> Result<Option<DecodedFrame>, String> {
         self.decode_limited(codec, data, &Limits::default()).map_err(|e| e.to_string())
@@ -327,6 +333,7 @@ fn on_unit(ds: &DataServer, camera: Guid, state: &Mutex<DecodeState>, u: &Encode
         ("no_picture", Value::Int(st.no_picture)),
         ("decode_errors", Value::Int(st.errors)),
         ("recoveries", Value::Int(st.decoder.recoveries() as i64)),
+        ("concealed", Value::Int(st.decoder.concealed() as i64)),
     ] {
         let _ = ds.set(camera, k, v);
     }

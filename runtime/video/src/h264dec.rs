@@ -1,11 +1,14 @@
-//! The H.264 decoder of one stream: openh264, with the size check before decoding and a
-//! recovery from decode errors.
+//! The H.264 decoder of one stream: openh264 with error concealment, the size check before
+//! decoding, and a recovery from decode errors.
 //!
-//! openh264 as the `openh264` crate builds it runs without error concealment: after one
-//! unit it cannot decode (corrupt, or truncated on the way), it refuses every unit until
-//! the next IDR — a second or more of frozen picture, and for ever on a link that damages
-//! some packet of every key frame. So the decoder keeps the units it decoded since the last
-//! IDR (bounded), and after an error it starts a fresh openh264 and decodes them again
+//! openh264 runs with error concealment on (`ERROR_CON_SLICE_MV_COPY_CROSS_IDR_FREEZE_RES_CHANGE`,
+//! through the vendored crate's setter, `vendor/openh264/PATCHED.md`): a unit that lost
+//! slices or packets (the receiver hands such units on, see [`crate::rtp`]) gives a picture
+//! completed from the previous one, counted in `concealed`. An access unit delimiter is
+//! appended to each unit so that openh264 outputs a picture whose last slice is missing.
+//! An error openh264 did not conceal (it would then refuse every unit until the next IDR)
+//! still triggers the recovery: the decoder keeps the units it decoded since the last IDR
+//! (bounded), and after such an error it starts a fresh openh264 and decodes them again
 //! (without converting pictures): the bad unit is then like a lost one, and decoding goes
 //! on from the last good reference (the SPS allows frame_num gaps, see [`crate::h264`]).
 
@@ -31,14 +34,33 @@ pub struct H264Decoder {
     replayable: bool,
     /// Times the decoder was rebuilt from the kept units.
     pub recoveries: u64,
+    /// Pictures returned that openh264 concealed in part (lost slices or references).
+    pub concealed: u64,
+}
+
+/// An access unit delimiter (NAL unit type 9, any primary picture type).
+const END_OF_UNIT: [u8; 6] = [0, 0, 0, 1, 0x09, 0xf0];
+
+/// openh264's `dsDataErrorConcealed` decoding state bit.
+const fn openh264_sys_concealed() -> i32 {
+    0x20
 }
 
 fn is_idr(annexb: &[u8]) -> bool {
     crate::rtp::annexb_nals(annexb).iter().any(|n| n.first().is_some_and(|h| h & 0x1f == 5))
 }
 
+/// openh264 with error concealment on (the vendored crate's setter, `vendor/openh264`): a
+/// picture with lost or undecodable slices, or a missing reference, is completed from the
+/// previous picture (slices copied along their neighbours' motion vectors) instead of
+/// refused; a change of resolution freezes the last picture until the next IDR.
 fn fresh() -> Result<openh264::decoder::Decoder, DecodeError> {
-    openh264::decoder::Decoder::new().map_err(|e| DecodeError::Failed(e.to_string()))
+    use openh264::decoder::{
+        Decoder, DecoderConfig, ERROR_CON_SLICE_MV_COPY_CROSS_IDR_FREEZE_RES_CHANGE as CONCEAL,
+    };
+    let config = DecoderConfig::new().error_concealment(CONCEAL);
+    Decoder::with_api_config(openh264::OpenH264API::from_source(), config)
+        .map_err(|e| DecodeError::Failed(e.to_string()))
 }
 
 impl H264Decoder {
@@ -56,24 +78,35 @@ impl H264Decoder {
         } else if self.refusing {
             return Err(DecodeError::Refused { width: 0, height: 0 });
         }
-        let unit = crate::h264::allow_frame_num_gaps(data).into_owned();
+        let mut unit = crate::h264::allow_frame_num_gaps(data).into_owned();
+        // An access unit delimiter after the unit tells openh264 the picture is complete:
+        // otherwise it waits for the next unit's first slice, and a picture whose last
+        // slice was lost is concealed but never output (a decode error, no picture).
+        unit.extend_from_slice(&END_OF_UNIT);
         if self.dec.is_none() {
             self.dec = Some(fresh()?);
         }
         let d = self.dec.as_mut().expect("made above");
+        let mut concealing = false;
         let result = match d.decode(&unit) {
             Ok(Some(yuv)) => {
                 let (w, h) = yuv.dimensions();
                 if limits.allows(w as u32, h as u32) {
                     let mut rgba = vec![0u8; w * h * 4];
                     yuv.write_rgba8(&mut rgba);
+                    self.concealed += d.concealed() as u64;
                     Ok(Some(DecodedFrame { rgba, width: w as u32, height: h as u32 }))
                 } else {
                     Err(DecodeError::Refused { width: w as u32, height: h as u32 })
                 }
             }
             Ok(None) => Ok(None),
-            Err(e) => Err(DecodeError::Failed(e.to_string())),
+            Err(e) => {
+                // openh264 concealed what it could (the state has dsDataErrorConcealed)
+                // but gave no picture: it goes on decoding, no recovery is needed.
+                concealing = e.native_code() & i64::from(openh264_sys_concealed()) != 0;
+                Err(DecodeError::Failed(e.to_string()))
+            }
         };
         let idr = is_idr(&unit);
         match &result {
@@ -82,6 +115,7 @@ impl H264Decoder {
                 self.since_key.clear();
                 self.replayable = false;
             }
+            Err(DecodeError::Failed(_)) if concealing => {}
             Err(DecodeError::Failed(_)) => self.recover(),
             Err(DecodeError::Refused { .. }) => {}
         }

@@ -61,8 +61,12 @@ pub fn looks_like_h264(payload: &[u8]) -> bool {
 pub struct DepackStats {
     /// Packets missing from the sequence (gaps in sequence numbers).
     pub lost_packets: u64,
-    /// Units (frames) thrown away because a packet of theirs was lost or malformed.
+    /// Units (frames) thrown away: malformed, over the size limit, before the first
+    /// parameter sets, or so damaged that no slice of theirs is left.
     pub dropped_units: u64,
+    /// Units emitted although packets of theirs were lost or cut (also in `units`): the
+    /// slices that arrived, a slice cut at the loss; the decoder conceals the rest.
+    pub damaged_units: u64,
     /// Packets of kinds this depacketizer does not handle (STAP-B, MTAP, FU-B).
     pub unsupported: u64,
     /// Units seen (each ended by the marker bit or a new timestamp): emitted or dropped.
@@ -109,10 +113,13 @@ const START: [u8; 4] = [0, 0, 0, 1];
 
 /// Rebuilds H.264 access units (Annex B, a start code before each NAL unit) from RTP.
 ///
-/// A unit ends at the marker bit, or when the timestamp changes. A lost packet throws away
-/// the unit it belonged to (counted in `dropped_units`); the decoder conceals the rest. No
-/// unit is emitted before the first whole one that carries a sequence parameter set (a
-/// decoder can do nothing without it).
+/// A unit ends at the marker bit, or when the timestamp changes. A unit that lost packets
+/// is still emitted (counted in `damaged_units`) with what arrived: whole NAL units, and a
+/// fragmented one cut where its first packet went missing (or was truncated); fragments
+/// after the cut are skipped up to the next NAL unit. openh264's error concealment fills
+/// in the rest of the picture. A damaged unit with no slice left is dropped. No unit is
+/// emitted before the first whole one that carries a sequence parameter set (a decoder can
+/// do nothing without it).
 #[derive(Debug, Default)]
 pub struct H264Depacketizer {
     seq: SeqTracker,
@@ -120,6 +127,8 @@ pub struct H264Depacketizer {
     ts: Option<u32>,
     key: bool,
     broken: bool,
+    /// Packets of the unit in progress were lost or cut: what is kept may be incomplete.
+    damaged: bool,
     in_fu: bool,
     /// A unit with a sequence parameter set was emitted (the decoder can start).
     seen_sps: bool,
@@ -128,6 +137,8 @@ pub struct H264Depacketizer {
     oversize: bool,
     /// Size of the current FU-A's first fragment.
     fu_size: usize,
+    /// Where the NAL unit in progress starts in `au` (its start code).
+    nal_start: usize,
     /// Largest access unit kept (0: the default limit).
     max_bytes: usize,
     pub stats: DepackStats,
@@ -156,9 +167,10 @@ impl H264Depacketizer {
         let Some(gap) = self.seq.next(p.ssrc, p.sequence) else { return };
         if gap > 0 {
             self.stats.lost_packets += gap;
-            // The unit in progress lost packets (its end, if this one starts another).
-            self.broken |= !self.au.is_empty() || self.in_fu;
-            self.in_fu = false;
+            // The unit in progress lost packets (its end, if this one starts another); a
+            // fragmented NAL unit in progress ends where the loss cut it.
+            self.damaged |= !self.au.is_empty() || self.in_fu;
+            self.cut();
         }
         if self.ts.is_some_and(|t| t != p.timestamp) {
             self.flush(emit);
@@ -166,7 +178,7 @@ impl H264Depacketizer {
         // Packets lost just before this one: this unit lost its beginning, unless this
         // packet starts an access unit (then only whole units were lost).
         if gap > 0 && self.au.is_empty() && !starts_access_unit(p.payload) {
-            self.broken = true;
+            self.damaged = true;
         }
         self.ts = Some(p.timestamp);
         self.payload(p.payload);
@@ -183,9 +195,20 @@ impl H264Depacketizer {
         let t = nal[0] & 0x1f;
         self.key |= t == 5 || t == 7;
         self.has_sps |= t == 7;
+        self.nal_start = self.au.len();
         self.au.extend_from_slice(&START);
         self.au.extend_from_slice(nal);
         self.bound();
+    }
+
+    /// A fragmented NAL unit in progress lost a fragment (or one was cut): it is left out
+    /// (openh264 conceals a missing slice better than a truncated one, which it reports as
+    /// a bitstream error with no picture), and its remaining fragments are skipped.
+    fn cut(&mut self) {
+        if self.in_fu {
+            self.au.truncate(self.nal_start);
+            self.in_fu = false;
+        }
     }
 
     /// Drops the unit in progress when it grew over the limit.
@@ -235,7 +258,9 @@ impl H264Depacketizer {
                 if !start && self.in_fu {
                     let expected = self.fu_size;
                     if size > expected || (!end && size < expected) {
-                        self.broken = true;
+                        self.damaged = true;
+                        self.cut();
+                        return;
                     }
                 }
                 if start {
@@ -250,8 +275,8 @@ impl H264Depacketizer {
                     self.au.extend_from_slice(&pl[2..]);
                     self.bound();
                 } else {
-                    // A middle or end fragment whose start we never saw.
-                    self.broken = true;
+                    // A middle or end fragment whose start was lost (or cut): skipped.
+                    self.damaged = true;
                 }
                 if end {
                     self.in_fu = false;
@@ -267,28 +292,39 @@ impl H264Depacketizer {
     /// Ends the unit in progress: emitted, or counted as dropped (broken, over the limit,
     /// or before the first SPS). A unit of nothing is no unit.
     fn flush(&mut self, emit: &mut dyn FnMut(Unit)) {
+        let (broken, key) = (self.broken, self.key);
+        // A fragmented NAL unit not ended: the unit lost its end.
+        let damaged = self.damaged || self.in_fu;
+        self.cut();
         let au = std::mem::take(&mut self.au);
-        let (broken, key) = (self.broken || self.in_fu, self.key);
         let has_sps = std::mem::take(&mut self.has_sps);
         let oversize = std::mem::take(&mut self.oversize);
         self.broken = false;
+        self.damaged = false;
         self.key = false;
         self.in_fu = false;
         let ts = self.ts.take();
-        if au.is_empty() && !broken {
+        if au.is_empty() && !broken && !damaged {
             return;
         }
         self.stats.units += 1;
         self.stats.oversize += oversize as u64;
-        if !broken && !au.is_empty() {
+        if !broken && !damaged && !au.is_empty() {
             self.seen_sps |= has_sps;
         }
-        if broken || au.is_empty() || !self.seen_sps {
+        let usable = if damaged { has_slice(&au) } else { !au.is_empty() };
+        if broken || !usable || !self.seen_sps {
             self.stats.dropped_units += 1;
         } else {
+            self.stats.damaged_units += damaged as u64;
             emit(Unit { data: au, timestamp: ts.unwrap_or(0), key });
         }
     }
+}
+
+/// Whether an Annex B unit holds a coded slice (NAL unit type 1 or 5).
+fn has_slice(au: &[u8]) -> bool {
+    annexb_nals(au).iter().any(|n| n.first().is_some_and(|h| matches!(h & 0x1f, 1 | 5)))
 }
 
 /// Whether an RTP/H.264 payload starts an access unit: a parameter set, SEI or delimiter,
@@ -432,22 +468,25 @@ mod tests {
     }
 
     #[test]
-    fn a_lost_fragment_drops_its_unit_only() {
+    fn a_lost_fragment_leaves_its_nal_unit_out_and_the_next_one_is_whole() {
         let packets = vec![
             pkt(1, 100, true, &stap(&[SPS, PPS])),
             pkt(2, 200, false, &[0x7c, 0x85, 10]),
             // seq 3 lost
-            pkt(4, 200, true, &[0x7c, 0x45, 13]),
-            pkt(5, 300, true, &[0x41, 1]),
+            pkt(4, 200, false, &[0x7c, 0x05, 12]), // skipped: after the cut
+            pkt(5, 200, false, &[0x7c, 0x45, 13]), // skipped
+            pkt(6, 200, true, &[0x41, 0x40, 7]),   // the next slice, whole
+            pkt(7, 300, true, &[0x41, 1]),
         ];
         let (units, stats) = run(&packets);
-        assert_eq!(units.len(), 2, "SPS unit and the P slice");
+        assert_eq!(units.len(), 3, "SPS unit, the damaged unit and the P slice");
+        assert_eq!(annexb_nals(&units[1].data), vec![&[0x41, 0x40, 7][..]]);
         assert_eq!(stats.lost_packets, 1);
-        assert_eq!(stats.dropped_units, 1);
+        assert_eq!((stats.dropped_units, stats.damaged_units), (0, 1));
     }
 
     #[test]
-    fn a_unit_that_lost_its_beginning_or_its_end_is_dropped() {
+    fn a_unit_that_lost_its_beginning_or_its_end_is_handed_on_damaged() {
         let slice = |first_mb_zero: bool| [0x41, if first_mb_zero { 0x80 } else { 0x40 }, 1];
         let packets = vec![
             pkt(1, 100, true, &stap(&[SPS, PPS])),
@@ -462,23 +501,41 @@ mod tests {
         ];
         let (units, stats) = run(&packets);
         let ts: Vec<u32> = units.iter().map(|u| u.timestamp).collect();
-        assert_eq!(ts, vec![100, 300, 600]);
-        assert_eq!((stats.units, stats.dropped_units, stats.lost_packets), (5, 2, 3));
+        assert_eq!(ts, vec![100, 200, 300, 400, 600]);
+        assert_eq!((stats.units, stats.dropped_units, stats.lost_packets), (5, 0, 3));
+        assert_eq!(stats.damaged_units, 2);
     }
 
     #[test]
-    fn a_fragment_shorter_than_its_siblings_was_truncated() {
+    fn a_damaged_unit_with_no_slice_left_is_dropped() {
+        let slice = |first_mb_zero: bool| [0x41, if first_mb_zero { 0x80 } else { 0x40 }, 1];
+        let packets = vec![
+            pkt(1, 100, true, &stap(&[SPS, PPS])),
+            // seq 2 lost: the start of unit 200's only slice
+            pkt(3, 200, true, &[0x7c, 0x45, 13]),
+            pkt(4, 300, true, &slice(true)),
+        ];
+        let (units, stats) = run(&packets);
+        let ts: Vec<u32> = units.iter().map(|u| u.timestamp).collect();
+        assert_eq!(ts, vec![100, 300]);
+        assert_eq!((stats.dropped_units, stats.damaged_units), (1, 0));
+    }
+
+    #[test]
+    fn a_fragment_shorter_than_its_siblings_was_truncated_and_its_nal_unit_left_out() {
         let packets = vec![
             pkt(1, 100, true, &stap(&[SPS, PPS])),
             pkt(2, 200, false, &[0x7c, 0x85, 1, 2, 3]),
             pkt(3, 200, false, &[0x7c, 0x05, 4, 5]), // cut
-            pkt(4, 200, true, &[0x7c, 0x45, 6]),
-            pkt(5, 300, false, &[0x7c, 0x85, 1, 2, 3]),
-            pkt(6, 300, true, &[0x7c, 0x45, 4, 5, 6, 7]), // longer than the start: it was cut
+            pkt(4, 200, false, &[0x7c, 0x45, 6]),    // skipped
+            pkt(5, 200, true, &[0x41, 0x40, 7]),     // a second slice, whole
+            pkt(6, 300, false, &[0x7c, 0x85, 1, 2, 3]),
+            pkt(7, 300, true, &[0x7c, 0x45, 4, 5, 6, 7]), // longer than the start: it was cut
         ];
         let (units, stats) = run(&packets);
-        assert_eq!(units.len(), 1);
-        assert_eq!(stats.dropped_units, 2);
+        assert_eq!(units.len(), 2, "the SPS unit and unit 200");
+        assert_eq!(annexb_nals(&units[1].data), vec![&[0x41, 0x40, 7][..]]);
+        assert_eq!((stats.dropped_units, stats.damaged_units), (1, 1), "unit 300: no slice left");
     }
 
     #[test]

@@ -105,6 +105,9 @@ pub struct StreamStats {
     pub dropped: u64,
     /// Of those, units over the size limit.
     pub oversize: u64,
+    /// Units handed on although packets of theirs were lost or cut (H.264: the decoder
+    /// conceals what is missing).
+    pub damaged: u64,
     /// RTP packets missing from the sequence.
     pub lost_packets: u64,
     pub reorder: ReorderStats,
@@ -189,6 +192,7 @@ impl Stream {
             s.dropped += d.dropped_units;
             s.oversize += d.oversize;
             s.lost_packets += d.lost_packets;
+            s.damaged += d.damaged_units;
         }
         if let Some(r) = r {
             s.reorder.reordered += r.reordered;

@@ -54,9 +54,11 @@ struct Counters {
     restarts: i64,
     ignored: i64,
     recoveries: i64,
+    concealed: i64,
+    damaged: i64,
 }
 
-const NAMES: [&str; 15] = [
+const NAMES: [&str; 17] = [
     "sent",
     "units",
     "frames",
@@ -72,6 +74,8 @@ const NAMES: [&str; 15] = [
     "restarts",
     "ignored",
     "recoveries",
+    "concealed",
+    "damaged",
 ];
 
 fn counters(r: &Running) -> Counters {
@@ -92,6 +96,8 @@ fn counters(r: &Running) -> Counters {
         restarts: g("restarts"),
         ignored: g("ignored"),
         recoveries: g("recoveries"),
+        concealed: g("concealed"),
+        damaged: g("damaged"),
     }
 }
 
@@ -199,12 +205,14 @@ fn h264_at_5_percent_loss_keeps_showing_at_least_half_the_frames() {
 }
 
 #[test]
-fn h264_at_720p_and_2_percent_loss_shows_more_than_half_the_frames() {
-    // 22 packets a frame: a lost packet costs a frame 2.7 times as often as at 640×480.
+fn h264_at_720p_and_2_percent_loss_shows_at_least_80_percent_of_the_frames() {
+    // 22 packets a frame (two slices): a lost packet damages a frame 2.7 times as often as
+    // at 640×480; the damaged frames are concealed by openh264, not dropped.
     let src = "testsrc2=size=1280x720:rate=30";
     let (link, c) = through_relay_from(src, Kind::RtpH264, lossy(0.02, 72), "h264 720p 2%");
-    assert!(link.lost > 0, "{c:?}");
-    assert!(shown(&link, &c) >= 0.5, "{c:?}");
+    assert!(link.lost > 0 && c.damaged > 0, "{c:?}");
+    assert!(c.concealed > 0 && c.concealed <= c.frames, "{c:?}");
+    assert!(shown(&link, &c) >= 0.8, "{c:?}");
 }
 
 #[test]
@@ -220,10 +228,10 @@ fn h264_with_reordered_packets_loses_no_frame() {
 fn h264_with_truncated_packets_keeps_showing_frames() {
     let imp = Impairment { truncate: 0.05, seed: 5, ..Impairment::default() };
     let (link, c) = through_relay_from(MOVING, Kind::RtpH264, imp, "h264 truncate 5%");
-    assert!(c.recoveries > 0, "decode errors were recovered from: {c:?}");
     assert!(link.truncated > 0);
-    assert!(c.dropped_network + c.decode_errors > 0, "truncation noticed: {c:?}");
-    assert!(shown(&link, &c) >= 0.5, "decoding recovers after errors: {c:?}");
+    assert!(c.damaged > 0, "truncated fragments noticed (their NAL units left out): {c:?}");
+    assert!(c.concealed > 0, "{c:?}");
+    assert!(shown(&link, &c) >= 0.5, "damaged frames are concealed: {c:?}");
 }
 
 #[test]
