@@ -10,7 +10,7 @@ use mocu_display::{BackendChoice, Display, DisplayOptions, ImageFit, Rect, Size,
 use mocu_host::{Module, ModuleContext};
 use mocu_video::window::Status;
 use mocu_video::{ReceiverConfig, VideoReceiver, VideoWindows, WindowsConfig};
-use peer::{Ffmpeg, Kind, check_bars};
+use peer::{Ffmpeg, Kind, check_bars, check_bars_at};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
@@ -176,10 +176,20 @@ fn mocu_run_shows_a_live_ffmpeg_stream_in_the_usv_layout() {
         .stdout;
     assert_eq!(raw.len(), 1280 * 720 * 4, "a 1280x720 screenshot");
     // The video window is the whole screen: a 4:3 picture 960 px wide, centred. The
-    // bars checked lie clear of the HUD (top-left gauges) and the map (bottom-right).
+    // points checked lie clear of the HUD (status header, heading tape, gauges, buttons)
+    // and the map: the bars below the tape, clear of the "2" of the timer.
     let c =
         fit_rect(Size::new(640.0, 480.0), Rect::new(0.0, 0.0, 1280.0, 720.0), ImageFit::Contain);
-    let bad = check_bars(|fx, fy| px(&raw, 1280, c.x + fx * c.w, c.y + fy * c.h));
+    let clear_of_the_hud: &[((f32, f32), [u8; 3], &str)] = &[
+        ((120.0 / 640.0, 200.0 / 480.0), [0, 255, 255], "cyan"),
+        ((200.0 / 640.0, 200.0 / 480.0), [255, 0, 255], "magenta"),
+        ((280.0 / 640.0, 200.0 / 480.0), [0, 0, 255], "blue"),
+        ((360.0 / 640.0, 200.0 / 480.0), [255, 255, 0], "yellow"),
+        ((440.0 / 640.0, 200.0 / 480.0), [0, 255, 0], "green"),
+        ((520.0 / 640.0, 160.0 / 480.0), [255, 0, 0], "red"),
+    ];
+    let bad =
+        check_bars_at(clear_of_the_hud, |fx, fy| px(&raw, 1280, c.x + fx * c.w, c.y + fy * c.h));
     assert!(bad.is_empty(), "the stream is not on screen: {}\n{stderr}", bad.join("\n"));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -167,8 +167,16 @@ pub const TOLERANCE: i32 = 48;
 
 /// Checks every bar of `BARS` with `pixel(fx, fy) -> rgb`; returns the mismatches.
 pub fn check_bars(pixel: impl Fn(f32, f32) -> [u8; 3]) -> Vec<String> {
+    check_bars_at(BARS, pixel)
+}
+
+/// Checks the given points of the test picture (as in `BARS`); returns the mismatches.
+pub fn check_bars_at(
+    bars: &[((f32, f32), [u8; 3], &str)],
+    pixel: impl Fn(f32, f32) -> [u8; 3],
+) -> Vec<String> {
     let mut bad = Vec::new();
-    for ((fx, fy), want, name) in BARS {
+    for ((fx, fy), want, name) in bars {
         let got = pixel(*fx, *fy);
         if got.iter().zip(want).any(|(g, w)| (*g as i32 - *w as i32).abs() > TOLERANCE) {
             bad.push(format!("{name} at ({fx:.3}, {fy:.3}): got {got:?}, want {want:?}"));
