@@ -1,16 +1,11 @@
 //! End-to-end tests of `mocu check` and `mocu build` through the built binary: the
 //! command-line contract of docs/language.md (formats, exit codes, bundles).
 
-use std::path::PathBuf;
-use std::process::{Command, Output};
+mod cli_support;
 
-fn mocu(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mocu"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("mocu runs")
-}
+use cli_support::mocu;
+use std::path::PathBuf;
+use std::process::Output;
 
 fn scratch(name: &str, text: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mocu-cli-{}", std::process::id()));

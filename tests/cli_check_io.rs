@@ -1,22 +1,13 @@
 //! `mocu check` at the file-system edge: folders (symbolic-link loops, no layouts), bytes that
 //! are not UTF-8, I/O failures in SARIF, and no colour codes when the output is not a terminal.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod cli_support;
 
-fn mocu(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mocu"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("mocu runs")
-}
+use cli_support::mocu;
+use std::path::{Path, PathBuf};
 
 fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mocu-cli-io-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    cli_support::scratch_dir("cli-io", name)
 }
 
 fn text(o: &[u8]) -> String {

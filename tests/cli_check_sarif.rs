@@ -5,25 +5,17 @@
 //! CI pins it in .ci/run). The validator is shown to reject a document with a required
 //! property removed, so a pass means something.
 
+mod cli_support;
+
+use cli_support::mocu;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 const SCHEMA: &str = "tests/data/sarif-schema-2.1.0.json";
 const VALIDATOR: &str = "tests/peers/validate_sarif.py";
 
-fn mocu(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mocu"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("mocu runs")
-}
-
 fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mocu-sarif-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+    cli_support::scratch_dir("sarif", name)
 }
 
 fn arg(p: &Path) -> &str {

@@ -6,35 +6,13 @@
 
 mod peer;
 
-use mocu_dataserver::{DataServer, Guid, Topic};
-use mocu_host::{Module, ModuleContext};
-use mocu_video::{ReceiverConfig, VideoReceiver};
+use mocu_dataserver::Topic;
+use mocu_host::Module;
+use peer::receiver::{Running, receiver};
 use peer::relay::{Impairment, Relay, RelayCounts};
 use peer::{Ffmpeg, Kind};
 use std::sync::mpsc;
 use std::time::Duration;
-
-struct Running {
-    ds: DataServer,
-    module: VideoReceiver,
-    camera: Guid,
-    port: u16,
-}
-
-fn receiver() -> Running {
-    let ds = DataServer::default();
-    let ctx = ModuleContext::detached("video", ds.clone());
-    let cfg = ReceiverConfig {
-        address: "127.0.0.1:0".parse().unwrap(),
-        camera: Some("test".into()),
-        ..ReceiverConfig::default()
-    };
-    let mut module = VideoReceiver::new(cfg);
-    module.start(&ctx).expect("receiver starts");
-    let camera = ds.resolve(&["cameras", "test"]).expect("root.cameras.test");
-    let port = ds.get(camera, "port").unwrap().as_i64().unwrap() as u16;
-    Running { ds, module, camera, port }
-}
 
 /// The camera's counters.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -4,36 +4,13 @@
 
 mod peer;
 
-use mocu_dataserver::{
-    Call, DataServer, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Topic, Value,
-};
-use mocu_host::{Module, ModuleContext};
-use mocu_video::{FrameMsg, ReceiverConfig, VideoReceiver};
+use mocu_dataserver::{Call, MethodSpec, ObjectInfo, Overflow, ParamSpec, Topic, Value};
+use mocu_host::Module;
+use mocu_video::FrameMsg;
+use peer::receiver::{Running, receiver};
 use peer::{Ffmpeg, Kind, check_bars};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-
-struct Running {
-    ds: DataServer,
-    module: VideoReceiver,
-    camera: Guid,
-    port: u16,
-}
-
-fn receiver() -> Running {
-    let ds = DataServer::default();
-    let ctx = ModuleContext::detached("video", ds.clone());
-    let cfg = ReceiverConfig {
-        address: "127.0.0.1:0".parse().unwrap(),
-        camera: Some("test".into()),
-        ..ReceiverConfig::default()
-    };
-    let mut module = VideoReceiver::new(cfg);
-    module.start(&ctx).expect("receiver starts");
-    let camera = ds.resolve(&["cameras", "test"]).expect("root.cameras.test");
-    let port = ds.get(camera, "port").unwrap().as_i64().unwrap() as u16;
-    Running { ds, module, camera, port }
-}
 
 /// Joins the camera and waits for `n` frames (at most `limit`).
 fn frames(r: &Running, n: usize, limit: Duration) -> Vec<FrameMsg> {

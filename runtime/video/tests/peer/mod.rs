@@ -3,6 +3,7 @@
 //! and stopped when its guard drops.
 #![allow(dead_code)]
 
+pub mod receiver;
 pub mod relay;
 
 use std::process::{Child, Command, Stdio};
