@@ -7,21 +7,11 @@ use mocu_language::{Diagnostics, FileId, parser};
 fn tree(e: &Expr) -> String {
     match &e.kind {
         ExprKind::Binary(op, a, b) => {
+            // The language's words for `or` and `and`; every other operator as `symbol()`.
             let op = match op {
-                BinOp::Coalesce => "??",
-                BinOp::Range => "..",
                 BinOp::Or => "or",
                 BinOp::And => "and",
-                BinOp::Eq => "==",
-                BinOp::Ne => "!=",
-                BinOp::Lt => "<",
-                BinOp::Le => "<=",
-                BinOp::Gt => ">",
-                BinOp::Ge => ">=",
-                BinOp::Add => "+",
-                BinOp::Sub => "-",
-                BinOp::Mul => "*",
-                BinOp::Div => "/",
+                other => other.symbol(),
             };
             format!("({} {op} {})", tree(a), tree(b))
         }
