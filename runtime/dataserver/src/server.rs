@@ -97,6 +97,13 @@ impl DataServer {
         self.inner.timer.clock().wall()
     }
 
+    /// [`DataServer::wall_time`] in seconds since the Unix epoch: what `time` properties hold
+    /// (alerts, command feedback), so that they and their ages follow the server's clock.
+    pub fn wall_secs(&self) -> f64 {
+        let since = self.wall_time().duration_since(std::time::UNIX_EPOCH);
+        since.map_or(0.0, |d| d.as_secs_f64())
+    }
+
     // ----- objects -------------------------------------------------------------------
 
     pub(crate) fn object(&self, guid: Guid) -> Result<Arc<Object>, DsError> {

@@ -11,7 +11,6 @@ use mocu_jit as jit;
 use mocu_language::program::{Action, Binding, SelectTarget, Shaping};
 use mocu_value::{Guid, Value, ValueKind};
 use std::sync::Arc;
-use std::time::{SystemTime, UNIX_EPOCH};
 
 #[derive(Clone, Debug)]
 pub(crate) enum CompiledAction {
@@ -132,10 +131,6 @@ pub(crate) struct ActionCtx {
     pub(crate) origin: Option<Guid>,
 }
 
-pub(crate) fn now() -> f64 {
-    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
-}
-
 /// `root.operator.<name>`, created when first needed.
 pub(crate) fn operator_child(sh: &Shared, name: &str, kind: &str) -> Option<Guid> {
     let op = crate::graph::ensure_object(&sh.ds, Guid::ROOT, "operator", "operator").ok()?;
@@ -166,7 +161,7 @@ fn feedback(sh: &Arc<Shared>, origin: Option<Guid>, target: &str, state: &str, r
         let _ = ds.set(f, "target", Value::str(target));
         let _ = ds.set(f, "state", Value::str(state));
         let _ = ds.set(f, "reason", Value::str(reason));
-        let _ = ds.set(f, "time", Value::Float(now()));
+        let _ = ds.set(f, "time", Value::Float(ds.wall_secs()));
     }
 }
 

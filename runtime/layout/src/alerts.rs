@@ -53,7 +53,7 @@ pub(crate) fn raise(sh: &Arc<Shared>, level: &str, text: &str, source: &str) -> 
         .ok()?;
     let _ = ds.set(g, "severity", Value::str(level));
     let _ = ds.set(g, "source", Value::str(source));
-    let _ = ds.set(g, "time", Value::Float(crate::actions::now()));
+    let _ = ds.set(g, "time", Value::Float(ds.wall_secs()));
     let _ = ds.set(g, "acknowledged", Value::Bool(false));
     let _ = ds.set(g, "active", Value::Bool(true));
     // `text` last: whoever follows alerts may take a written text as a complete alert.

@@ -1,9 +1,10 @@
 //! What the receiver reads of H.264 itself: the size a sequence parameter set declares
 //! (checked against the camera's limits before anything is decoded) and one rewrite of it.
 //!
-//! The rewrite: openh264, as the `openh264` crate builds it, runs with error concealment
-//! off, and then one missing frame (a `frame_num` gap) makes it refuse every frame up to
-//! the next IDR. An SPS that allows gaps (`gaps_in_frame_num_value_allowed_flag = 1`) lets
+//! The rewrite: openh264 refuses a stream with a missing frame (a `frame_num` gap) up to
+//! the next IDR unless its SPS allows gaps (without concealment, as the registry `openh264`
+//! crate runs it, every frame; `h264dec.rs` turns concealment on through the vendored
+//! crate, and the rewrite stays so that a gap is never a reason to stop). An SPS that allows gaps (`gaps_in_frame_num_value_allowed_flag = 1`) lets
 //! it go on from the frames it has: a lost unit costs that unit (and some drift until the
 //! next key frame), not the rest of the group of pictures. [`allow_frame_num_gaps`] sets
 //! the flag in every SPS of an access unit.

@@ -12,7 +12,7 @@
 use mocu_dataserver::DataServer;
 use mocu_display::{Align, Baseline, Brush, Canvas, Color, Point, Rect, TextStyle};
 use mocu_value::{Guid, PropName, Value};
-use std::time::{Duration, SystemTime, UNIX_EPOCH};
+use std::time::Duration;
 
 /// The native component's name.
 pub const COMPONENT: &str = "AlertLayer";
@@ -52,15 +52,11 @@ pub struct Plan {
     pub critical: bool,
 }
 
-fn now() -> f64 {
-    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64())
-}
-
 /// The alerts to show in a widget of size `b`, newest first.
 pub fn plan(ds: &DataServer, b: Rect) -> Plan {
     let mut plan = Plan::default();
     let Some(folder) = ds.resolve(&["operator", "alerts"]) else { return plan };
-    let t = now();
+    let t = ds.wall_secs();
     let mut list: Vec<(f64, Shown)> = Vec::new();
     for a in ds.children(folder).unwrap_or_default() {
         let get = |k: &str| ds.try_get(a, PropName::new(k));
