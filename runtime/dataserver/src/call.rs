@@ -8,6 +8,7 @@
 //!   already answered (`TimedOut`) does not run at all.
 
 use crate::executor::Target;
+use crate::feed::Change;
 use crate::method::{CallMode, CallOptions, CallOutcome, Method, check_args};
 use crate::server::{DataServer, Inner};
 use crate::timer::{Fire, TimerKey};
@@ -114,6 +115,7 @@ impl DataServer {
         done: impl FnOnce(CallOutcome) + Send + 'static,
     ) {
         let name = name.into();
+        let done = self.recorded_call(guid, name, &args, done);
         let method = match self.resolve_method(guid, name) {
             Ok(m) => m,
             Err(outcome) => return done(outcome),
@@ -124,7 +126,7 @@ impl DataServer {
         };
         let options = options.unwrap_or(method.spec.defaults);
         let slot = Arc::new(ReplySlot {
-            state: Mutex::new(SlotState { done: Some(Box::new(done)), timeout: None }),
+            state: Mutex::new(SlotState { done: Some(done), timeout: None }),
             server: Arc::downgrade(&self.inner),
         });
         if let Some(t) = options.timeout {
@@ -159,6 +161,29 @@ impl DataServer {
         } else {
             self.inner.timer.schedule(options.delay, Fire::Submit(target), job);
         }
+    }
+
+    /// `done`, answering also to the change feed when one is open: the call is numbered
+    /// and fed now, its outcome when it is answered.
+    fn recorded_call(
+        &self,
+        guid: Guid,
+        method: PropName,
+        args: &[Value],
+        done: impl FnOnce(CallOutcome) + Send + 'static,
+    ) -> Completion {
+        if !self.inner.feeds.is_open() {
+            return Box::new(done);
+        }
+        let call = self.inner.feeds.next_call();
+        self.emit(|| Change::Called { call, object: guid, method, args: args.to_vec() });
+        let server = Arc::downgrade(&self.inner);
+        Box::new(move |outcome: CallOutcome| {
+            if let Some(inner) = server.upgrade() {
+                DataServer { inner }.emit(|| Change::Answered { call, outcome: outcome.clone() });
+            }
+            done(outcome)
+        })
     }
 
     /// The method as published now, or why there is none.

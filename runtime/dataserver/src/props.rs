@@ -3,6 +3,7 @@
 //! between a check and the store) can bypass the rules.
 
 use crate::error::{DsError, ObjRef};
+use crate::feed::Change;
 use crate::meta::PropMeta;
 use crate::notification::{Kind, Notification};
 use crate::object::{ObjState, Prop};
@@ -41,6 +42,13 @@ impl DataServer {
         }
         let value = validate(guid, &os, name, &meta, value)?;
         let meta = (meta != PropMeta::default()).then(|| Arc::new(meta));
+        self.emit(|| Change::PropertySet {
+            object: guid,
+            name,
+            value: value.clone(),
+            meta: meta.clone(),
+            created: true,
+        });
         add_prop(&mut os, name, value, meta, now);
         Ok(())
     }
@@ -84,6 +92,13 @@ impl DataServer {
                     property: name,
                 });
             }
+            self.emit(|| Change::PropertySet {
+                object: guid,
+                name,
+                value: value.clone(),
+                meta: None,
+                created: true,
+            });
             add_prop(os, name, value, None, now);
             return Ok(());
         };
@@ -96,6 +111,13 @@ impl DataServer {
             return Ok(());
         }
         p.value = value.clone();
+        self.emit(|| Change::PropertySet {
+            object: guid,
+            name,
+            value: value.clone(),
+            meta: p.meta.clone(),
+            created: false,
+        });
         notify_prop(&os.prop_subs, guid, Kind::Changed, name, Some(value));
         Ok(())
     }
@@ -157,6 +179,7 @@ impl DataServer {
         if os.props.remove(name).is_none() {
             return Err(DsError::NoSuchProperty { object: obj_ref_of(guid, &os), property: name });
         }
+        self.emit(|| Change::PropertyDeleted { object: guid, name });
         notify_prop(&os.prop_subs, guid, Kind::Deleted, name, None);
         Ok(())
     }

@@ -3,6 +3,7 @@
 use crate::clock::{Clock, SystemClock};
 use crate::error::{DsError, ObjRef};
 use crate::executor::{Executor, Pool, Stats, Target};
+use crate::feed::Change;
 use crate::hash::BuildIdHasher;
 use crate::meta::ObjectInfo;
 use crate::notification::{Kind, Notification, Subject};
@@ -45,6 +46,7 @@ pub(crate) struct Inner {
     pub(crate) pool: Arc<Pool>,
     pub(crate) timer: Timer,
     pub(crate) streams: crate::stream::Streams,
+    pub(crate) feeds: crate::feed::Feeds,
 }
 
 impl Default for DataServer {
@@ -72,6 +74,7 @@ impl DataServer {
             pool,
             timer,
             streams: Default::default(),
+            feeds: Default::default(),
         };
         let root = Object::new(Guid::ROOT, ObjectInfo::new("root", "root"), None);
         inner.objects.pin().insert(Guid::ROOT, root);
@@ -146,6 +149,7 @@ impl DataServer {
         self.inner.objects.pin().insert(guid, obj);
         let index = index.min(ps.children.len());
         ps.children.insert(index, guid);
+        self.emit(|| Change::Created { object: guid, parent, index, info: info.clone() });
         notify_child(&ps, Kind::New, guid, &info, index);
         Ok(guid)
     }
@@ -178,6 +182,8 @@ impl DataServer {
         mid.state.write().children.push(child);
         self.inner.objects.pin().insert(guid, mid);
         ps.children[index] = guid;
+        self.emit(|| Change::Created { object: guid, parent, index, info: info.clone() });
+        self.emit(|| Change::Moved { object: child, parent: guid, index: 0 });
         notify_child(&ps, Kind::Deleted, child, &child_info, index);
         notify_child(&ps, Kind::New, guid, &info, index);
         Ok(guid)
@@ -200,6 +206,7 @@ impl DataServer {
                 notify_child(&ps, Kind::Deleted, guid, &info, index);
             }
         }
+        self.emit(|| Change::Deleted { object: guid });
         self.kill_subtree(guid);
         Ok(())
     }
@@ -232,10 +239,12 @@ impl DataServer {
         let mut ps = p.state.write();
         if let Some(index) = ps.children.iter().position(|&g| g == guid) {
             ps.children[index] = keep;
+            self.emit(|| Change::Moved { object: keep, parent, index });
             notify_child(&ps, Kind::Deleted, guid, &info, index);
             notify_child(&ps, Kind::New, keep, &keep_info, index);
         }
         drop(ps);
+        self.emit(|| Change::Deleted { object: guid });
         self.kill_subtree(guid);
         Ok(())
     }
@@ -254,6 +263,7 @@ impl DataServer {
                 return Ok(());
             }
             os.info = info.clone();
+            self.emit(|| Change::Renamed { object: guid, info: info.clone() });
             os.parent
         };
         if let Some(parent) = parent {
@@ -478,6 +488,31 @@ impl DataServer {
     /// that are not yet due do not count). For tests and orderly shutdown.
     pub fn quiesce(&self) {
         crate::executor::wait_quiet(&self.inner.pool);
+    }
+
+    /// Moves `clock` (this server's clock) forward to `to` one timer job at a time: the jobs
+    /// due by then fire in deadline order (equal deadlines in the order they were
+    /// scheduled), the clock set to each one's deadline, and the work each one causes runs
+    /// to quiet before the next fires. A run driven this way ends in the same state every
+    /// time its inputs are the same (deterministic runs and replay, `docs/dataserver.md`).
+    pub fn advance_settled(&self, clock: &crate::ManualClock, to: std::time::Instant) {
+        loop {
+            self.quiesce();
+            match self.inner.timer.next_due() {
+                Some(due) if due <= to => {
+                    clock.move_to(due);
+                    self.inner.timer.fire_one();
+                }
+                _ => break,
+            }
+        }
+        clock.move_to(to);
+        self.quiesce();
+    }
+
+    /// The deadline of the earliest timer job not yet fired.
+    pub fn next_deadline(&self) -> Option<std::time::Instant> {
+        self.inner.timer.next_due()
     }
 
     /// Worker threads alive now: `Config::workers`, plus any the pool added while all of
