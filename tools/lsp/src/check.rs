@@ -1,0 +1,202 @@
+//! Diagnostics as you type: the same check as `mocu check` (`check_path`: the project found
+//! by walking up to the nearest `project.toml`, its schemas, the `use`d files), run on a worker
+//! thread over the open documents' text, published per file.
+//!
+//! Stale work is dropped, not queued: the worker takes the newest request for each document
+//! when it is free, so a burst of keystrokes costs one check after the check that was
+//! running, and a result whose document changed while it was computed is not published.
+
+use crate::overlay::OverlayLoader;
+use crate::text::{LineIndex, path_to_uri};
+use crossbeam_channel::{Receiver, Sender};
+use lsp_server::{Message, Notification};
+use lsp_types::notification::{Notification as _, PublishDiagnostics};
+use lsp_types::{
+    DiagnosticRelatedInformation, DiagnosticSeverity, Location, NumberOrString,
+    PublishDiagnosticsParams,
+};
+use mocu_language::{Diagnostics, FileKind, Schema, Severity, SourceMap};
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// What one check of a document found.
+#[derive(Debug, Default)]
+pub struct Analysis {
+    /// The document's version the check read.
+    pub version: i32,
+    /// Diagnostics by file path, for every file the check read (empty: nothing to show).
+    pub by_file: BTreeMap<String, Vec<lsp_types::Diagnostic>>,
+    /// The checked type of each top-level `let`, by (path, byte offset of its value).
+    pub let_types: HashMap<(String, u32), String>,
+    /// The schema of the document's project (empty when it has none).
+    pub schema: Schema,
+    /// How long the check took.
+    pub elapsed: Duration,
+}
+
+/// Checks `path` (its text from `loader`) as `mocu check PATH` does.
+pub fn analyse(path: &str, version: i32, loader: &OverlayLoader) -> Analysis {
+    let started = Instant::now();
+    let mut sources = SourceMap::new();
+    let mut diags = Diagnostics::new();
+    let mut out = Analysis { version, ..Analysis::default() };
+    let Ok(text) = mocu_language::SourceLoader::read(loader, path) else { return out };
+    let bundle = if mocu_language::file_kind(path, &text) == FileKind::Layout {
+        let project = mocu_language::project_of(path, None, loader, &mut sources, &mut diags);
+        if let Some(p) = &project {
+            out.schema = p.schema.clone();
+        }
+        Some(mocu_language::check_layout(
+            path,
+            text,
+            loader,
+            project.as_ref(),
+            &mut sources,
+            &mut diags,
+        ))
+    } else {
+        mocu_language::check_path(path, text, loader, &mut sources, &mut diags)
+    };
+    diags.sort();
+    for (_, f) in sources.files() {
+        out.by_file.entry(f.path.clone()).or_default();
+    }
+    out.by_file.entry(path.to_string()).or_default();
+    for d in diags.iter() {
+        let file = sources.get(d.span.file);
+        let lsp = to_lsp(d, &sources);
+        out.by_file.entry(file.path.clone()).or_default().push(lsp);
+    }
+    for layout in bundle.iter().flat_map(|b| &b.layouts) {
+        for l in &layout.program.lets.0 {
+            let file = sources.get(l.value.span.file);
+            out.let_types.insert((file.path.clone(), l.value.span.start), l.value.ty.to_string());
+        }
+    }
+    out.elapsed = started.elapsed();
+    out
+}
+
+/// One diagnostic as LSP shows it: the message, then its label and help as `mocu check`
+/// prints them; the help also goes in `data` for the code actions.
+fn to_lsp(d: &mocu_language::Diagnostic, sources: &SourceMap) -> lsp_types::Diagnostic {
+    let file = sources.get(d.span.file);
+    let range = LineIndex::new(&file.text).range(d.span.start as usize, d.span.end as usize);
+    let mut message = d.message.clone();
+    if let Some(label) = &d.label {
+        message.push_str(&format!(" ({label})"));
+    }
+    if let Some(help) = &d.help {
+        message.push_str(&format!("\nhelp: {help}"));
+    }
+    let related = d
+        .related
+        .iter()
+        .map(|(span, note)| {
+            let f = sources.get(span.file);
+            DiagnosticRelatedInformation {
+                location: Location {
+                    uri: path_to_uri(&f.path),
+                    range: LineIndex::new(&f.text).range(span.start as usize, span.end as usize),
+                },
+                message: note.clone(),
+            }
+        })
+        .collect::<Vec<_>>();
+    lsp_types::Diagnostic {
+        range,
+        severity: Some(match d.severity {
+            Severity::Error => DiagnosticSeverity::ERROR,
+            Severity::Warning => DiagnosticSeverity::WARNING,
+        }),
+        code: Some(NumberOrString::String(d.code.to_string())),
+        source: Some("mocu".into()),
+        message,
+        related_information: (!related.is_empty()).then_some(related),
+        data: d.help.as_ref().map(|h| serde_json::json!({ "help": h })),
+        ..lsp_types::Diagnostic::default()
+    }
+}
+
+/// A request to check one document.
+pub struct Job {
+    pub path: String,
+    pub version: i32,
+    pub loader: OverlayLoader,
+}
+
+/// The latest analysis of each document, shared by the worker and the request handlers.
+pub type Analyses = Arc<Mutex<HashMap<String, Arc<Analysis>>>>;
+
+/// Starts the checking worker: it publishes on `out` and records each analysis in `store`.
+/// It ends when `jobs` is closed.
+pub fn spawn_worker(
+    jobs: Receiver<Job>,
+    out: Sender<Message>,
+    store: Analyses,
+) -> std::io::Result<std::thread::JoinHandle<()>> {
+    std::thread::Builder::new()
+        .name("mocu-lsp-check".into())
+        .stack_size(mocu_language::COMPILER_STACK)
+        .spawn(move || worker(&jobs, &out, &store))
+}
+
+fn worker(jobs: &Receiver<Job>, out: &Sender<Message>, store: &Analyses) {
+    // What each document's last published check showed, to clear files it no longer reads.
+    let mut shown: HashMap<String, BTreeSet<String>> = HashMap::new();
+    let mut pending: Vec<Job> = Vec::new();
+    loop {
+        if pending.is_empty() {
+            match jobs.recv() {
+                Ok(j) => pending.push(j),
+                Err(_) => return,
+            }
+        }
+        take_newest(jobs, &mut pending);
+        let job = pending.remove(0);
+        let analysis = analyse(&job.path, job.version, &job.loader);
+        // A newer edit of this document arrived while checking: this result is stale.
+        take_newest(jobs, &mut pending);
+        if pending.iter().any(|j| j.path == job.path) {
+            continue;
+        }
+        let files: BTreeSet<String> = analysis.by_file.keys().cloned().collect();
+        let gone: Vec<String> = shown
+            .get(&job.path)
+            .map(|old| old.difference(&files).cloned().collect())
+            .unwrap_or_default();
+        for f in gone {
+            publish(out, &f, Vec::new(), None);
+        }
+        for (f, list) in &analysis.by_file {
+            let version = (*f == job.path).then_some(job.version);
+            publish(out, f, list.clone(), version);
+        }
+        shown.insert(job.path.clone(), files);
+        if let Ok(mut s) = store.lock() {
+            s.insert(job.path, Arc::new(analysis));
+        }
+    }
+}
+
+/// Adds every queued job to `pending`, keeping only the newest per document.
+fn take_newest(jobs: &Receiver<Job>, pending: &mut Vec<Job>) {
+    while let Ok(j) = jobs.try_recv() {
+        pending.retain(|p| p.path != j.path);
+        pending.push(j);
+    }
+}
+
+fn publish(
+    out: &Sender<Message>,
+    path: &str,
+    diagnostics: Vec<lsp_types::Diagnostic>,
+    version: Option<i32>,
+) {
+    let params = PublishDiagnosticsParams { uri: path_to_uri(path), diagnostics, version };
+    let _ = out.send(Message::Notification(Notification::new(
+        PublishDiagnostics::METHOD.to_string(),
+        params,
+    )));
+}
