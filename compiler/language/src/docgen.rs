@@ -14,12 +14,13 @@ use crate::parser;
 use crate::source::SourceMap;
 use std::fmt::Write;
 
-/// One component as the reference shows it.
-struct Entry {
-    name: String,
-    description: Vec<String>,
-    params: Vec<(String, String, String, String)>,
-    events: Vec<String>,
+/// One component as the reference shows it (the language server's hover shows it too).
+pub struct Entry {
+    pub name: String,
+    pub description: Vec<String>,
+    /// (name, type, default, meaning)
+    pub params: Vec<(String, String, String, String)>,
+    pub events: Vec<String>,
 }
 
 /// The page for `files` (path, text), in the order given.
@@ -95,7 +96,8 @@ the component then shows its grey \"no data\" look (`—`), never a false zero.
 
 ";
 
-fn entries(path: &str, text: &str) -> Vec<Entry> {
+/// The components of one stdlib file (path, text), with their doc comments.
+pub fn entries(path: &str, text: &str) -> Vec<Entry> {
     let mut sources = SourceMap::new();
     let file = sources.add(path.to_string(), text.to_string());
     let mut diags = Diagnostics::new();
@@ -170,6 +172,13 @@ fn doc_comment(text: &str, start: usize) -> (Vec<String>, Vec<(String, String)>)
         }
     }
     (description, params)
+}
+
+/// One component's section of the reference, in Markdown.
+pub fn entry_markdown(e: &Entry) -> String {
+    let mut out = String::new();
+    write_entry(&mut out, e);
+    out
 }
 
 fn write_entry(out: &mut String, e: &Entry) {
