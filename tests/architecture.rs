@@ -28,6 +28,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("mocu-sim", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     ("mocu-mavlink", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     ("mocu-input", &["mocu-value", "mocu-dataserver", "mocu-host"]),
+    // Replay writes the world model from a recording, as a protocol module would.
+    ("mocu-replay", &["mocu-dataserver"]),
+    // The recorder reads the DataServer's change feed; it knows no layout, renderer or module.
+    ("mocu-record", &["mocu-value", "mocu-dataserver"]),
     // The window manager knows no painter and nothing of the compiler.
     ("mocu-display", &["mocu-value", "mocu-dataserver"]),
     // Video: a module and the video window's painter (sees only the display's Canvas).
@@ -75,6 +79,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "mocu-layout",
             "mocu-widgets",
             "mocu-hotreload",
+            "mocu-replay",
+            "mocu-record",
         ],
     ),
 ];

@@ -1,0 +1,201 @@
+//! Records a trial to an MCAP file (`mocu run --record`, docs/recording.md): the
+//! DataServer's change feed (objects, properties with units, calls and outcomes, video units
+//! as received), each stamped at its source, plus the trial's events (operator actions,
+//! alerts, layout loads and diagnostics) handed in by the command line.
+//!
+//! One thread writes the file; writers never wait for it (the feed's queue is unbounded).
+//!
+//! Architecture invariant: depends on the DataServer and `mocu-value` only; knows nothing
+//! of the layout, the renderer or the modules (they reach it through the DataServer, or
+//! through [`Recorder::event`]).
+
+#![forbid(unsafe_code)]
+
+mod file;
+mod json;
+mod schemas;
+mod translate;
+mod world;
+
+use crossbeam_channel::{Receiver, Sender};
+use mocu_dataserver::{ChangeFeed, DataServer, Value};
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+/// The longest a recorded message waits in an open chunk before it is on disk.
+pub const FLUSH_EVERY: Duration = Duration::from_secs(1);
+
+/// What the file says about the trial (its `mocu` metadata record and attachment).
+#[derive(Clone, Debug, Default)]
+pub struct Header {
+    /// The command line.
+    pub command: String,
+    /// The layout, profile or bundle run.
+    pub target: String,
+    /// The layout shown.
+    pub layout: String,
+    /// `system` or `manual`.
+    pub clock: String,
+    /// The checked bundle the run started with (`mocu build`'s format), attached as
+    /// `bundle.mocub`.
+    pub bundle: Option<Vec<u8>>,
+}
+
+/// Where an event goes: `/events` (the trial record) or `/layout` (loads, reloads,
+/// diagnostics).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum EventTopic {
+    Events,
+    Layout,
+}
+
+impl EventTopic {
+    /// The topic `--log`'s event of this name goes to.
+    pub fn of(event: &str) -> EventTopic {
+        match event {
+            "load" | "reload" | "unload" | "diagnostic" | "instance" => EventTopic::Layout,
+            _ => EventTopic::Events,
+        }
+    }
+}
+
+pub(crate) struct Event {
+    pub at: SystemTime,
+    pub source: String,
+    pub event: String,
+    pub fields: Vec<(String, Value)>,
+}
+
+/// What a finished recording holds.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Totals {
+    pub messages: u64,
+    /// Message bytes before compression.
+    pub bytes: u64,
+}
+
+/// A recording in progress. Dropping it finishes the file (summary and footer).
+pub struct Recorder {
+    ds: DataServer,
+    events: Option<Sender<Event>>,
+    thread: Option<JoinHandle<Result<Totals, String>>>,
+}
+
+impl Recorder {
+    /// Starts recording `ds` to `path` (created or truncated). Start it before the modules,
+    /// so that everything they publish is on the record.
+    pub fn start(ds: &DataServer, path: &Path, header: Header) -> Result<Recorder, String> {
+        let mut out = file::Out::create(path)?;
+        let now = nanos(ds.wall_time());
+        let mut meta = BTreeMap::new();
+        meta.insert("format".to_string(), "1".to_string());
+        meta.insert("command".to_string(), header.command.clone());
+        meta.insert("target".to_string(), header.target.clone());
+        meta.insert("layout".to_string(), header.layout.clone());
+        meta.insert("clock".to_string(), header.clock.clone());
+        meta.insert("start_ns".to_string(), now.to_string());
+        out.metadata("mocu", meta)?;
+        if let Some(b) = &header.bundle {
+            out.attach("bundle.mocub", "application/x-mocu-bundle", now, b)?;
+        }
+        let feed = ds.change_feed();
+        let (tx, rx) = crossbeam_channel::unbounded();
+        let thread = std::thread::Builder::new()
+            .name("mocu-record".into())
+            .spawn(move || write_loop(out, feed, rx, now))
+            .map_err(|e| e.to_string())?;
+        Ok(Recorder { ds: ds.clone(), events: Some(tx), thread: Some(thread) })
+    }
+
+    /// Records an event now (on the DataServer's clock): `source` is `layout` or a module's
+    /// name; `event` and `fields` as `--log` writes them.
+    pub fn event(&self, source: &str, event: &str, fields: &[(&str, Value)]) {
+        self.event_at(self.ds.wall_time(), source, event, fields);
+    }
+
+    /// Records an event stamped `at` (when it happened at its source).
+    pub fn event_at(&self, at: SystemTime, source: &str, event: &str, fields: &[(&str, Value)]) {
+        if let Some(tx) = &self.events {
+            let fields = fields.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+            let _ = tx.send(Event { at, source: source.into(), event: event.into(), fields });
+        }
+    }
+
+    /// Writes what is queued, the summary and the footer; returns what the file holds.
+    pub fn finish(mut self) -> Result<Totals, String> {
+        self.stop()
+    }
+
+    fn stop(&mut self) -> Result<Totals, String> {
+        self.events = None;
+        match self.thread.take() {
+            Some(t) => t.join().map_err(|_| "the recorder panicked".to_string())?,
+            None => Ok(Totals::default()),
+        }
+    }
+}
+
+impl Drop for Recorder {
+    fn drop(&mut self) {
+        if let Err(e) = self.stop() {
+            eprintln!("mocu: recording: {e}");
+        }
+    }
+}
+
+pub(crate) fn nanos(t: SystemTime) -> u64 {
+    t.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos().min(u64::MAX as u128) as u64)
+}
+
+/// The writer thread: changes and events as they come, a flush at most [`FLUSH_EVERY`]
+/// after the first unflushed message; ends (finishing the file) when the recorder is
+/// dropped. An idle recording sleeps.
+fn write_loop(
+    out: file::Out,
+    feed: ChangeFeed,
+    events: Receiver<Event>,
+    start: u64,
+) -> Result<Totals, String> {
+    let mut t = translate::Translator::new(out, start)?;
+    let mut dirty_since: Option<Instant> = None;
+    let changes = feed.receiver();
+    loop {
+        // Asleep until something comes, or until the open chunk is due on disk.
+        let wait = dirty_since.map_or(Duration::from_secs(3600), |d| {
+            (d + FLUSH_EVERY).saturating_duration_since(Instant::now())
+        });
+        let mut open = true;
+        let mut got = false;
+        crossbeam_channel::select! {
+            recv(changes) -> c => if let Ok(c) = c { t.change(c)?; got = true; },
+            recv(events) -> e => match e {
+                Ok(e) => { t.event(e)?; got = true; }
+                Err(_) => open = false,
+            },
+            default(wait) => {}
+        }
+        if !open {
+            break;
+        }
+        // Whatever else is queued, in one go.
+        for c in feed.try_iter() {
+            t.change(c)?;
+        }
+        for e in events.try_iter() {
+            t.event(e)?;
+        }
+        if got && dirty_since.is_none() {
+            dirty_since = Some(Instant::now());
+        }
+        if dirty_since.is_some_and(|d| d.elapsed() >= FLUSH_EVERY) {
+            t.flush()?;
+            dirty_since = None;
+        }
+    }
+    for c in feed.try_iter() {
+        t.change(c)?;
+    }
+    t.finish()
+}

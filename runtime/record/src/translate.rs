@@ -1,0 +1,353 @@
+//! From the change feed and the trial's events to messages on the channels of
+//! docs/recording.md.
+
+use crate::file::{Dynamic, Out};
+use crate::world::{self, World};
+use crate::{Event, EventTopic, Totals, json, nanos};
+use mocu_dataserver::{CallOutcome, Change, Guid, Stamped, Value};
+use std::collections::{HashMap, HashSet};
+
+/// A keyframe at least this often (nanoseconds of `log_time`) …
+const SNAPSHOT_NS: u64 = 10_000_000_000;
+/// … or after this many `/world/*` changes, whichever comes first.
+const SNAPSHOT_CHANGES: u64 = 20_000;
+
+/// Methods that are not recorded: the display drawing itself, every frame.
+const UNRECORDED_METHODS: &[&str] = &["paint"];
+
+pub(crate) struct Translator {
+    out: Out,
+    world: World,
+    buf: Vec<u8>,
+    /// Calls not recorded, until their outcome comes.
+    skipped: HashSet<u64>,
+    /// Each object's last `lat`, `lon`, `alt`.
+    places: HashMap<Guid, [Option<f64>; 3]>,
+    last_seq: u64,
+    last_time: u64,
+    snapshot_time: u64,
+    since_snapshot: u64,
+    event_seq: u64,
+}
+
+impl Translator {
+    pub fn new(out: Out, start: u64) -> Result<Translator, String> {
+        let mut t = Translator {
+            out,
+            world: World::new(),
+            buf: Vec::with_capacity(4096),
+            skipped: HashSet::new(),
+            places: HashMap::new(),
+            last_seq: 0,
+            last_time: start,
+            snapshot_time: start,
+            since_snapshot: 0,
+            event_seq: 0,
+        };
+        t.snapshot()?;
+        Ok(t)
+    }
+
+    fn snapshot(&mut self) -> Result<(), String> {
+        self.buf.clear();
+        self.world.snapshot(self.last_seq, &mut self.buf);
+        let ch = self.out.snapshot;
+        self.out.write(ch, self.last_seq, self.last_time, &self.buf)?;
+        self.snapshot_time = self.last_time;
+        self.since_snapshot = 0;
+        Ok(())
+    }
+
+    pub fn change(&mut self, s: Stamped) -> Result<(), String> {
+        let t = nanos(s.wall);
+        let due = self.since_snapshot > 0
+            && (t.saturating_sub(self.snapshot_time) >= SNAPSHOT_NS
+                || self.since_snapshot >= SNAPSHOT_CHANGES);
+        if due {
+            self.snapshot()?;
+        }
+        self.last_seq = s.seq;
+        self.last_time = self.last_time.max(t);
+        let b = &mut self.buf;
+        b.clear();
+        let channel = match s.change {
+            Change::Created { object, parent, index, info } => {
+                self.world.create(object, parent, index, info.clone());
+                b.extend_from_slice(b"{\"op\":\"created\",\"guid\":");
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"parent\":");
+                json::uint(b, parent.get());
+                b.extend_from_slice(b",\"index\":");
+                json::uint(b, index as u64);
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &self.world.path(object));
+                world::info(b, &info);
+                b.push(b'}');
+                self.since_snapshot += 1;
+                self.out.object
+            }
+            Change::Renamed { object, info } => {
+                self.world.rename(object, info.clone());
+                b.extend_from_slice(b"{\"op\":\"changed\",\"guid\":");
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &self.world.path(object));
+                world::info(b, &info);
+                b.push(b'}');
+                self.since_snapshot += 1;
+                self.out.object
+            }
+            Change::Moved { object, parent, index } => {
+                self.world.moved(object, parent, index);
+                b.extend_from_slice(b"{\"op\":\"changed\",\"guid\":");
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"parent\":");
+                json::uint(b, parent.get());
+                b.extend_from_slice(b",\"index\":");
+                json::uint(b, index as u64);
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &self.world.path(object));
+                if let Some(o) = self.world.get(object) {
+                    world::info(b, &o.info);
+                }
+                b.push(b'}');
+                self.since_snapshot += 1;
+                self.out.object
+            }
+            Change::Deleted { object } => {
+                b.extend_from_slice(b"{\"op\":\"deleted\",\"guid\":");
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &self.world.path(object));
+                b.push(b'}');
+                self.world.delete(object);
+                self.places.remove(&object);
+                self.since_snapshot += 1;
+                self.out.object
+            }
+            Change::PropertySet { object, name, value, meta, created } => {
+                b.extend_from_slice(if created {
+                    b"{\"op\":\"created\",\"object\":"
+                } else {
+                    b"{\"op\":\"set\",\"object\":"
+                });
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &format!("{}.{name}", self.world.path(object)));
+                b.extend_from_slice(b",\"name\":");
+                json::string(b, name.as_str());
+                b.extend_from_slice(b",\"kind\":\"");
+                b.extend_from_slice(value.kind().name().as_bytes());
+                b.extend_from_slice(b"\",\"value\":");
+                json::value(b, &value);
+                if let Some(units) = meta.as_ref().and_then(|m| m.units.as_deref()) {
+                    b.extend_from_slice(b",\"unit\":");
+                    json::string(b, units);
+                }
+                if created && let Some(m) = &meta {
+                    b.extend_from_slice(b",\"meta\":");
+                    world::meta(b, m);
+                }
+                b.push(b'}');
+                self.world.set(object, name, &value, &meta);
+                self.since_snapshot += 1;
+                let ch = self.out.property;
+                self.out.write(ch, s.seq, t, &self.buf)?;
+                return self.place(object, name.as_str(), &value, s.seq, t);
+            }
+            Change::PropertyDeleted { object, name } => {
+                b.extend_from_slice(b"{\"op\":\"deleted\",\"object\":");
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &format!("{}.{name}", self.world.path(object)));
+                b.extend_from_slice(b",\"name\":");
+                json::string(b, name.as_str());
+                b.push(b'}');
+                self.world.delete_property(object, name);
+                self.since_snapshot += 1;
+                self.out.property
+            }
+            Change::Called { call, object, method, args } => {
+                if UNRECORDED_METHODS.contains(&method.as_str()) {
+                    self.skipped.insert(call);
+                    return Ok(());
+                }
+                b.extend_from_slice(b"{\"op\":\"call\",\"id\":");
+                json::uint(b, call);
+                b.extend_from_slice(b",\"object\":");
+                json::uint(b, object.get());
+                b.extend_from_slice(b",\"path\":");
+                json::string(b, &self.world.path(object));
+                b.extend_from_slice(b",\"method\":");
+                json::string(b, method.as_str());
+                b.extend_from_slice(b",\"args\":");
+                json::typed_list(b, &args);
+                b.push(b'}');
+                self.out.calls
+            }
+            Change::Answered { call, outcome } => {
+                if self.skipped.remove(&call) {
+                    return Ok(());
+                }
+                b.extend_from_slice(b"{\"op\":\"outcome\",\"id\":");
+                json::uint(b, call);
+                b.extend_from_slice(b",\"outcome\":\"");
+                b.extend_from_slice(outcome.label().as_bytes());
+                b.extend_from_slice(b"\",\"reason\":");
+                let (reason, results) = match &outcome {
+                    CallOutcome::Refused(r) | CallOutcome::Failed(r) => (r.as_str(), &[][..]),
+                    CallOutcome::Accepted(r) => ("", &r[..]),
+                    _ => ("", &[][..]),
+                };
+                json::string(b, reason);
+                b.extend_from_slice(b",\"results\":");
+                json::typed_list(b, results);
+                b.push(b'}');
+                self.out.calls
+            }
+            Change::Sent { listener, message } => return self.video(listener, &message, s.seq, t),
+        };
+        self.out.write(channel, s.seq, t, &self.buf)?;
+        Ok(())
+    }
+
+    /// A unit on a camera's `encoded` listener: `[data, codec, unit, arrival_us]`.
+    fn video(&mut self, listener: Guid, msg: &[Value], seq: u64, t: u64) -> Result<(), String> {
+        let Some(l) = self.world.get(listener) else { return Ok(()) };
+        if &*l.info.name != "encoded" {
+            return Ok(());
+        }
+        let (Some(Value::Bytes(data)), Some(Value::Str(codec))) = (msg.first(), msg.get(1)) else {
+            return Ok(());
+        };
+        let camera = l.parent.map(|p| self.world.path(p)).unwrap_or_else(|| "root".into());
+        let (kind, topic, format) = match &**codec {
+            "h264" => (Dynamic::Video, format!("/video/{camera}"), "h264"),
+            "jpeg" => (Dynamic::Image, format!("/image/{camera}"), "jpeg"),
+            _ => return Ok(()),
+        };
+        let ch = self.out.dynamic(kind, &topic)?;
+        let b = &mut self.buf;
+        b.clear();
+        timestamp(b, t);
+        b.extend_from_slice(b",\"frame_id\":");
+        json::string(b, &camera);
+        b.extend_from_slice(b",\"format\":\"");
+        b.extend_from_slice(format.as_bytes());
+        b.extend_from_slice(b"\"");
+        if let Some(Value::Int(u)) = msg.get(2) {
+            b.extend_from_slice(b",\"unit\":");
+            json::int(b, *u);
+        }
+        if let Some(Value::Int(a)) = msg.get(3) {
+            b.extend_from_slice(b",\"arrival_us\":");
+            json::int(b, *a);
+        }
+        b.extend_from_slice(b",\"data\":\"");
+        json::base64(b, data);
+        b.extend_from_slice(b"\"}");
+        self.out.write(ch, seq, t, &self.buf)?;
+        Ok(())
+    }
+
+    /// A `lat`, `lon` or `alt` change: the object's `foxglove.LocationFix`.
+    fn place(
+        &mut self,
+        object: Guid,
+        name: &str,
+        v: &Value,
+        seq: u64,
+        t: u64,
+    ) -> Result<(), String> {
+        let i = match name {
+            "lat" => 0,
+            "lon" => 1,
+            "alt" => 2,
+            _ => return Ok(()),
+        };
+        let entry = self.places.entry(object).or_default();
+        entry[i] = v.as_f64();
+        let [Some(lat), Some(lon), alt] = *entry else { return Ok(()) };
+        if !(lat.is_finite() && lon.is_finite()) {
+            return Ok(());
+        }
+        let path = self.world.path(object);
+        let ch = self.out.dynamic(Dynamic::Location, &format!("/location/{path}"))?;
+        let b = &mut self.buf;
+        b.clear();
+        timestamp(b, t);
+        b.extend_from_slice(b",\"frame_id\":");
+        json::string(b, &path);
+        b.extend_from_slice(b",\"latitude\":");
+        json::float(b, lat);
+        b.extend_from_slice(b",\"longitude\":");
+        json::float(b, lon);
+        b.extend_from_slice(b",\"altitude\":");
+        json::float(b, alt.filter(|a| a.is_finite()).unwrap_or(0.0));
+        b.extend_from_slice(
+            b",\"position_covariance\":[0,0,0,0,0,0,0,0,0],\"position_covariance_type\":0}",
+        );
+        self.out.write(ch, seq, t, &self.buf)?;
+        Ok(())
+    }
+
+    pub fn event(&mut self, e: Event) -> Result<(), String> {
+        let t = nanos(e.at);
+        let topic = EventTopic::of(&e.event);
+        let b = &mut self.buf;
+        b.clear();
+        let layout = e.fields.iter().find(|(k, _)| k == "layout").map(|(_, v)| v.to_string());
+        match topic {
+            EventTopic::Events => {
+                b.extend_from_slice(b"{\"source\":");
+                json::string(b, &e.source);
+                b.extend_from_slice(b",\"event\":");
+                json::string(b, &e.event);
+            }
+            EventTopic::Layout => {
+                b.extend_from_slice(b"{\"event\":");
+                json::string(b, &e.event);
+                if let Some(l) = &layout {
+                    b.extend_from_slice(b",\"layout\":");
+                    json::string(b, l);
+                }
+            }
+        }
+        b.extend_from_slice(b",\"fields\":{");
+        for (i, (k, v)) in e.fields.iter().enumerate() {
+            if i > 0 {
+                b.push(b',');
+            }
+            json::string(b, k);
+            b.push(b':');
+            json::plain(b, v);
+        }
+        b.extend_from_slice(b"}}");
+        self.event_seq += 1;
+        let ch = match topic {
+            EventTopic::Events => self.out.events,
+            EventTopic::Layout => self.out.layout,
+        };
+        self.out.write(ch, self.event_seq, t, &self.buf)?;
+        Ok(())
+    }
+
+    pub fn flush(&mut self) -> Result<(), String> {
+        self.out.flush()
+    }
+
+    pub fn finish(self) -> Result<Totals, String> {
+        let totals = Totals { messages: self.out.messages, bytes: self.out.bytes };
+        self.out.finish()?;
+        Ok(totals)
+    }
+}
+
+/// `{"timestamp":{"sec":…,"nsec":…}` (the message's opening brace included).
+fn timestamp(b: &mut Vec<u8>, t: u64) {
+    b.extend_from_slice(b"{\"timestamp\":{\"sec\":");
+    json::uint(b, t / 1_000_000_000);
+    b.extend_from_slice(b",\"nsec\":");
+    json::uint(b, t % 1_000_000_000);
+    b.push(b'}');
+}

@@ -1,0 +1,233 @@
+//! The recorder's mirror of the world model, kept from the change feed alone: each object's
+//! parent, position, names and properties, and its dotted path. It names what a message
+//! is about (`root.vehicles.usv1.nav.speed`) and is what a `/world/snapshot` keyframe
+//! writes, so a keyframe is exactly consistent with the changes before it.
+
+use crate::json;
+use mocu_dataserver::{Guid, ObjectInfo, PropMeta, PropName, Value};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+pub(crate) struct Obj {
+    pub parent: Option<Guid>,
+    pub info: ObjectInfo,
+    pub path: Arc<str>,
+    pub children: Vec<Guid>,
+    pub props: Vec<Prop>,
+}
+
+pub(crate) struct Prop {
+    pub name: PropName,
+    pub value: Value,
+    pub meta: Option<Arc<PropMeta>>,
+}
+
+pub(crate) struct World {
+    objects: HashMap<Guid, Obj>,
+}
+
+impl World {
+    pub fn new() -> World {
+        let root = Obj {
+            parent: None,
+            info: ObjectInfo::new("root", "root"),
+            path: "root".into(),
+            children: Vec::new(),
+            props: Vec::new(),
+        };
+        World { objects: HashMap::from([(Guid::ROOT, root)]) }
+    }
+
+    pub fn get(&self, g: Guid) -> Option<&Obj> {
+        self.objects.get(&g)
+    }
+
+    /// The object's path, or `#<guid>` for one the feed never showed.
+    pub fn path(&self, g: Guid) -> Arc<str> {
+        match self.objects.get(&g) {
+            Some(o) => o.path.clone(),
+            None => format!("#{}", g.get()).into(),
+        }
+    }
+
+    pub fn create(&mut self, g: Guid, parent: Guid, index: usize, info: ObjectInfo) {
+        let path = format!("{}.{}", self.path(parent), info.name).into();
+        if let Some(p) = self.objects.get_mut(&parent) {
+            let i = index.min(p.children.len());
+            p.children.insert(i, g);
+        }
+        let o = Obj { parent: Some(parent), info, path, children: Vec::new(), props: Vec::new() };
+        self.objects.insert(g, o);
+    }
+
+    pub fn rename(&mut self, g: Guid, info: ObjectInfo) {
+        if let Some(o) = self.objects.get_mut(&g) {
+            o.info = info;
+        }
+        self.repath(g);
+    }
+
+    pub fn moved(&mut self, g: Guid, parent: Guid, index: usize) {
+        let old = self.objects.get(&g).and_then(|o| o.parent);
+        if let Some(p) = old.and_then(|p| self.objects.get_mut(&p)) {
+            p.children.retain(|&c| c != g);
+        }
+        if let Some(p) = self.objects.get_mut(&parent) {
+            let i = index.min(p.children.len());
+            p.children.insert(i, g);
+        }
+        if let Some(o) = self.objects.get_mut(&g) {
+            o.parent = Some(parent);
+        }
+        self.repath(g);
+    }
+
+    pub fn delete(&mut self, g: Guid) {
+        let parent = self.objects.get(&g).and_then(|o| o.parent);
+        if let Some(p) = parent.and_then(|p| self.objects.get_mut(&p)) {
+            p.children.retain(|&c| c != g);
+        }
+        let mut stack = vec![g];
+        while let Some(x) = stack.pop() {
+            if let Some(o) = self.objects.remove(&x) {
+                stack.extend(o.children);
+            }
+        }
+    }
+
+    /// Sets a property; returns the object's path.
+    pub fn set(&mut self, g: Guid, name: PropName, value: &Value, meta: &Option<Arc<PropMeta>>) {
+        let Some(o) = self.objects.get_mut(&g) else { return };
+        match o.props.iter_mut().find(|p| p.name == name) {
+            Some(p) => {
+                p.value = value.clone();
+                p.meta = meta.clone();
+            }
+            None => o.props.push(Prop { name, value: value.clone(), meta: meta.clone() }),
+        }
+    }
+
+    pub fn delete_property(&mut self, g: Guid, name: PropName) {
+        if let Some(o) = self.objects.get_mut(&g) {
+            o.props.retain(|p| p.name != name);
+        }
+    }
+
+    /// Recomputes the paths of `g`'s subtree (after a rename or a move).
+    fn repath(&mut self, g: Guid) {
+        let mut stack = vec![g];
+        while let Some(x) = stack.pop() {
+            let Some(o) = self.objects.get(&x) else { continue };
+            let path: Arc<str> = match o.parent {
+                Some(p) => format!("{}.{}", self.path(p), o.info.name).into(),
+                None => "root".into(),
+            };
+            let children = o.children.clone();
+            if let Some(o) = self.objects.get_mut(&x) {
+                o.path = path;
+            }
+            stack.extend(children);
+        }
+    }
+
+    /// The whole world as a `mocu.WorldSnapshot` (parents before children, root left out).
+    pub fn snapshot(&self, seq: u64, out: &mut Vec<u8>) {
+        out.extend_from_slice(b"{\"seq\":");
+        json::uint(out, seq);
+        out.extend_from_slice(b",\"objects\":[");
+        let mut first = true;
+        let mut stack: Vec<Guid> = self
+            .objects
+            .get(&Guid::ROOT)
+            .map(|r| r.children.iter().rev().copied().collect())
+            .unwrap_or_default();
+        while let Some(g) = stack.pop() {
+            let Some(o) = self.objects.get(&g) else { continue };
+            if !first {
+                out.push(b',');
+            }
+            first = false;
+            let parent = o.parent.unwrap_or(Guid::ROOT);
+            let index =
+                self.objects.get(&parent).and_then(|p| p.children.iter().position(|&c| c == g));
+            out.extend_from_slice(b"{\"guid\":");
+            json::uint(out, g.get());
+            out.extend_from_slice(b",\"parent\":");
+            json::uint(out, parent.get());
+            out.extend_from_slice(b",\"index\":");
+            json::uint(out, index.unwrap_or(0) as u64);
+            info(out, &o.info);
+            out.extend_from_slice(b",\"properties\":[");
+            for (i, p) in o.props.iter().enumerate() {
+                if i > 0 {
+                    out.push(b',');
+                }
+                out.extend_from_slice(b"{\"name\":");
+                json::string(out, p.name.as_str());
+                out.extend_from_slice(b",\"kind\":\"");
+                out.extend_from_slice(p.value.kind().name().as_bytes());
+                out.extend_from_slice(b"\",\"value\":");
+                json::value(out, &p.value);
+                if let Some(m) = &p.meta {
+                    out.extend_from_slice(b",\"meta\":");
+                    meta(out, m);
+                }
+                out.push(b'}');
+            }
+            out.extend_from_slice(b"]}");
+            stack.extend(o.children.iter().rev().copied());
+        }
+        out.extend_from_slice(b"]}");
+    }
+}
+
+/// `,"name":…,"type":…,"subtype":…`
+pub(crate) fn info(out: &mut Vec<u8>, info: &ObjectInfo) {
+    out.extend_from_slice(b",\"name\":");
+    json::string(out, &info.name);
+    out.extend_from_slice(b",\"type\":");
+    json::string(out, &info.kind);
+    out.extend_from_slice(b",\"subtype\":");
+    json::string(out, &info.subtype);
+}
+
+/// A property's metadata, each field only when set.
+pub(crate) fn meta(out: &mut Vec<u8>, m: &PropMeta) {
+    out.push(b'{');
+    let mut first = true;
+    let mut key = |out: &mut Vec<u8>, k: &str| {
+        if !first {
+            out.push(b',');
+        }
+        first = false;
+        json::string(out, k);
+        out.push(b':');
+    };
+    if let Some(k) = m.kind {
+        key(out, "kind");
+        json::string(out, k.name());
+    }
+    for (k, v) in [
+        ("units", &m.units),
+        ("representation", &m.representation),
+        ("description", &m.description),
+    ] {
+        if let Some(v) = v {
+            key(out, k);
+            json::string(out, v);
+        }
+    }
+    if let Some((min, max)) = m.range {
+        key(out, "range");
+        out.push(b'[');
+        json::float(out, min);
+        out.push(b',');
+        json::float(out, max);
+        out.push(b']');
+    }
+    if let Some(hz) = m.rate_hz {
+        key(out, "rate_hz");
+        json::float(out, hz);
+    }
+    out.push(b'}');
+}

@@ -1,0 +1,240 @@
+//! The recorder end to end on a manual clock: what happens in the DataServer lands on the
+//! channels of docs/recording.md, stamped when it happened, read back with the `mcap` crate.
+//! (The independent reader is the Python peer: tests/peers/read_recording.py.)
+
+use mocu_dataserver::*;
+use mocu_record::{Header, Recorder};
+use serde_json::Value as Json;
+use std::sync::Arc;
+use std::time::{Duration, SystemTime};
+
+const T0: u64 = 1_700_000_000;
+
+fn manual() -> (DataServer, ManualClock) {
+    let clock = ManualClock::new();
+    clock.set_wall(SystemTime::UNIX_EPOCH + Duration::from_secs(T0));
+    (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
+}
+
+/// Every message: (topic, log_time in ns since T0, JSON).
+fn read(path: &std::path::Path) -> Vec<(String, u64, Json)> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            let json = serde_json::from_slice(&m.data).unwrap();
+            (m.channel.topic.clone(), m.log_time - T0 * 1_000_000_000, json)
+        })
+        .collect()
+}
+
+fn on<'a>(msgs: &'a [(String, u64, Json)], topic: &str) -> Vec<&'a (String, u64, Json)> {
+    msgs.iter().filter(|(t, _, _)| t == topic).collect()
+}
+
+fn ms(n: u64) -> Duration {
+    Duration::from_millis(n)
+}
+
+#[test]
+fn a_property_change_is_recorded_with_its_path_unit_kind_and_the_time_it_was_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let v = ds.create_object(ds.root(), ObjectInfo::new("usv1", "vehicle")).unwrap();
+    let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+    let meta = PropMeta::typed(ValueKind::Float).units("m/s");
+    ds.create_property(nav, "speed", Value::Float(0.0), meta).unwrap();
+    clock.advance(ms(1500));
+    ds.set(nav, "speed", Value::Float(3.25)).unwrap();
+    clock.advance(ms(500));
+    ds.set(nav, "speed", Value::Float(3.25)).unwrap(); // no change: not recorded
+    ds.set(nav, "mode", Value::str("auto")).unwrap();
+    rec.finish().unwrap();
+
+    let msgs = read(&file);
+    let objects = on(&msgs, "/world/object");
+    assert_eq!(objects.len(), 2);
+    assert_eq!(objects[1].2["path"], "root.usv1.nav");
+    assert_eq!(objects[1].2["parent"], v.get());
+    let props = on(&msgs, "/world/property");
+    let rows: Vec<(u64, String, String, Json)> = props
+        .iter()
+        .map(|(_, t, j)| (*t, j["op"].to_string(), j["path"].to_string(), j["value"].clone()))
+        .collect();
+    assert_eq!(
+        rows,
+        vec![
+            (0, "\"created\"".into(), "\"root.usv1.nav.speed\"".into(), Json::from(0.0)),
+            (1_500_000_000, "\"set\"".into(), "\"root.usv1.nav.speed\"".into(), Json::from(3.25)),
+            (
+                2_000_000_000,
+                "\"created\"".into(),
+                "\"root.usv1.nav.mode\"".into(),
+                Json::from("auto")
+            ),
+        ]
+    );
+    assert_eq!(props[1].2["unit"], "m/s");
+    assert_eq!(props[1].2["kind"], "float");
+    assert_eq!(props[0].2["meta"]["units"], "m/s");
+    assert!(props[2].2.get("unit").is_none());
+}
+
+#[test]
+fn a_call_and_its_outcome_are_recorded_once_each_and_paint_calls_not_at_all() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("usv1", "vehicle")).unwrap();
+    let spec = MethodSpec::new("goto")
+        .param(ParamSpec::new("x", ValueKind::Float))
+        .defaults(CallOptions::queued().timeout(ms(1000)));
+    // Keeps the call unanswered: it times out.
+    let pending = Arc::new(parking_lot::Mutex::new(Vec::new()));
+    let p = pending.clone();
+    ds.publish_method(o, spec, move |call: Call| p.lock().push(call)).unwrap();
+    ds.publish_method_fn(o, MethodSpec::new("paint"), |_| CallOutcome::Accepted(vec![])).unwrap();
+    let (tx, rx) = crossbeam_channel::bounded(1);
+    ds.call(o, "goto", vec![Value::Float(10.0)], None, move |out| {
+        let _ = tx.send(out);
+    });
+    let _ = ds.call_wait(o, "paint", vec![], None);
+    ds.quiesce();
+    clock.advance(ms(1000));
+    assert_eq!(rx.recv_timeout(Duration::from_secs(10)).unwrap(), CallOutcome::TimedOut);
+    rec.finish().unwrap();
+
+    let msgs = read(&file);
+    let calls = on(&msgs, "/calls");
+    assert_eq!(calls.len(), 2, "{calls:?}");
+    assert_eq!(calls[0].2["op"], "call");
+    assert_eq!(calls[0].2["method"], "goto");
+    assert_eq!(calls[0].2["path"], "root.usv1");
+    assert_eq!(calls[0].2["args"][0], serde_json::json!({"kind": "float", "value": 10.0}));
+    assert_eq!(
+        (calls[1].1, &calls[1].2["op"], &calls[1].2["outcome"]),
+        (1_000_000_000, &"outcome".into(), &"timed_out".into())
+    );
+    assert_eq!(calls[0].2["id"], calls[1].2["id"]);
+}
+
+#[test]
+fn video_units_are_recorded_as_received_on_foxglove_channels_and_raw_frames_are_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let cams = ds.create_object(ds.root(), ObjectInfo::new("cameras", "folder")).unwrap();
+    let cam = ds.create_listener(cams, "udp5600").unwrap();
+    let encoded = ds.create_listener(cam, "encoded").unwrap();
+    let unit = |data: &[u8], codec: &str, n: i64| {
+        vec![Value::Bytes(data.into()), Value::str(codec), Value::Int(n), Value::Int(42)]
+    };
+    ds.send(encoded, unit(&[0, 0, 0, 1, 0x67], "h264", 1)).unwrap();
+    clock.advance(ms(33));
+    ds.send(encoded, unit(&[0xff, 0xd8, 0xff], "jpeg", 2)).unwrap();
+    ds.send(cam, vec![Value::Bytes(vec![0u8; 12].into()), Value::Int(2), Value::Int(2)]).unwrap();
+    rec.finish().unwrap();
+
+    let msgs = read(&file);
+    let video = on(&msgs, "/video/root.cameras.udp5600");
+    assert_eq!(video.len(), 1);
+    assert_eq!(video[0].2["format"], "h264");
+    assert_eq!(video[0].2["data"], "AAAAAWc=");
+    assert_eq!(video[0].2["frame_id"], "root.cameras.udp5600");
+    assert_eq!(video[0].2["timestamp"], serde_json::json!({"sec": T0, "nsec": 0}));
+    let image = on(&msgs, "/image/root.cameras.udp5600");
+    assert_eq!(image.len(), 1);
+    assert_eq!((image[0].1, &image[0].2["data"]), (33_000_000, &"/9j/".into()));
+    assert_eq!(
+        msgs.iter().filter(|(t, _, _)| t.starts_with("/video") || t.starts_with("/image")).count(),
+        2
+    );
+}
+
+#[test]
+fn a_position_is_recorded_as_a_location_fix_once_both_lat_and_lon_are_known() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, _clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let nav = ds.create_object(ds.root(), ObjectInfo::new("nav", "nav")).unwrap();
+    ds.set(nav, "lat", Value::Float(32.7)).unwrap();
+    ds.set(nav, "lon", Value::Float(-117.2)).unwrap();
+    ds.set(nav, "lat", Value::Float(32.8)).unwrap();
+    rec.finish().unwrap();
+    let msgs = read(&file);
+    let fixes: Vec<(f64, f64)> = on(&msgs, "/location/root.nav")
+        .iter()
+        .map(|(_, _, j)| (j["latitude"].as_f64().unwrap(), j["longitude"].as_f64().unwrap()))
+        .collect();
+    assert_eq!(fixes, vec![(32.7, -117.2), (32.8, -117.2)]);
+}
+
+#[test]
+fn a_keyframe_holds_the_world_as_the_changes_before_it_left_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let a = ds.create_object(ds.root(), ObjectInfo::new("a", "thing")).unwrap();
+    let b = ds.create_object(a, ObjectInfo::new("b", "thing")).unwrap();
+    ds.create_property(b, "x", Value::Int(1), PropMeta::typed(ValueKind::Int).units("m")).unwrap();
+    ds.set(a, "y", Value::str("first")).unwrap();
+    ds.set(a, "y", Value::str("second")).unwrap();
+    clock.advance(Duration::from_secs(11));
+    ds.set(b, "x", Value::Int(2)).unwrap(); // after the keyframe that this write makes due
+    rec.finish().unwrap();
+
+    let msgs = read(&file);
+    let snaps = on(&msgs, "/world/snapshot");
+    assert_eq!(snaps.len(), 2, "one at the start, one after 10 s");
+    assert_eq!(snaps[0].2["objects"], serde_json::json!([]));
+    let world = &snaps[1].2;
+    assert_eq!(world["seq"], 5);
+    assert_eq!(
+        world["objects"],
+        serde_json::json!([
+            {"guid": a.get(), "parent": 1, "index": 0, "name": "a", "type": "thing", "subtype": "",
+             "properties": [{"name": "y", "kind": "string", "value": "second"}]},
+            {"guid": b.get(), "parent": a.get(), "index": 0, "name": "b", "type": "thing", "subtype": "",
+             "properties": [{"name": "x", "kind": "int", "value": 1, "meta": {"kind": "int", "units": "m"}}]}
+        ])
+    );
+}
+
+#[test]
+fn events_go_to_the_trial_record_or_the_layout_channel_by_their_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    rec.event("layout", "load", &[("layout", Value::str("usv.mocu"))]);
+    clock.advance(ms(250));
+    rec.event("layout", "action", &[("kind", Value::str("acknowledge"))]);
+    rec.event(
+        "sim",
+        "alert",
+        &[("severity", Value::str("warning")), ("n", Value::Float(f64::NAN))],
+    );
+    rec.finish().unwrap();
+    let msgs = read(&file);
+    let layout = on(&msgs, "/layout");
+    assert_eq!(layout.len(), 1);
+    assert_eq!(
+        layout[0].2,
+        serde_json::json!({"event": "load", "layout": "usv.mocu", "fields": {"layout": "usv.mocu"}})
+    );
+    let events = on(&msgs, "/events");
+    assert_eq!(events.len(), 2);
+    assert_eq!(events[0].1, 250_000_000);
+    assert_eq!(
+        events[0].2,
+        serde_json::json!({"source": "layout", "event": "action", "fields": {"kind": "acknowledge"}})
+    );
+    assert_eq!(events[1].2["fields"]["n"], "NaN");
+}
