@@ -21,6 +21,7 @@ pub mod bundle;
 pub mod codes;
 pub mod diagnostics;
 pub mod docgen;
+pub mod format;
 pub mod fs;
 pub mod lexer;
 pub mod modules;

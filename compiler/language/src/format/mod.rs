@@ -1,0 +1,125 @@
+//! The formatter behind `mocu fmt`: one canonical layout for a layout file
+//! (docs/formatting.md).
+//!
+//! It reads the file twice over: as tokens and comments ([`tokens`]), printed as written, and
+//! as the parser's syntax tree, whose spans say which token starts a line and which `-` is a
+//! prefix ([`shape`]). [`printer`] decides only what goes between tokens: spaces, line breaks
+//! and indentation. Comments stay where they were, on their line or on a line of their own.
+//!
+//! A file with syntax errors is not formatted. The result is parsed again and its tree
+//! compared with the original's (spans aside) before it is returned, so a formatting that
+//! would change what the file means is refused instead of written.
+
+pub mod diff;
+mod printer;
+mod shape;
+mod tokens;
+
+use crate::ast;
+use crate::diagnostics::{Diagnostics, Severity};
+use crate::source::FileId;
+
+/// Why a file was not formatted.
+#[derive(Debug, PartialEq, Eq)]
+pub enum FormatError {
+    /// It has syntax errors, reported in the diagnostics.
+    Syntax,
+    /// Its formatted text would not parse to the same tree (a bug of the formatter, which
+    /// this check keeps from doing harm); the message says where.
+    WouldChangeMeaning(String),
+}
+
+impl std::fmt::Display for FormatError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FormatError::Syntax => write!(f, "the file has syntax errors"),
+            FormatError::WouldChangeMeaning(at) => write!(
+                f,
+                "formatting would change what the file means ({at}); it was left as it is \
+                 (a bug of `mocu fmt`: please report it)"
+            ),
+        }
+    }
+}
+
+const BOM: &str = "\u{FEFF}";
+
+/// `text` (the layout file `file`) in the canonical layout. Syntax errors go to `diags`.
+pub fn format_source(
+    file: FileId,
+    text: &str,
+    diags: &mut Diagnostics,
+) -> Result<String, FormatError> {
+    let errors = diags.count(Severity::Error);
+    let tree = crate::parser::parse(file, text, diags);
+    if diags.count(Severity::Error) > errors {
+        return Err(FormatError::Syntax);
+    }
+    let out = format_tree(text, &tree);
+    let mut again = Diagnostics::new();
+    let tree2 = crate::parser::parse(file, &out, &mut again);
+    if again.count(Severity::Error) > 0 {
+        return Err(FormatError::WouldChangeMeaning("the result does not parse".into()));
+    }
+    let (a, b) = (tree_shape(&tree), tree_shape(&tree2));
+    if a != b {
+        let at = a.bytes().zip(b.bytes()).take_while(|(x, y)| x == y).count();
+        let context = &a[floor(&a, at.saturating_sub(60))..floor(&a, (at + 60).min(a.len()))];
+        return Err(FormatError::WouldChangeMeaning(format!("the trees differ near `{context}`")));
+    }
+    Ok(out)
+}
+
+/// `text`, already parsed to `tree`, in the canonical layout.
+pub fn format_tree(text: &str, tree: &ast::File) -> String {
+    let toks = tokens::tokenize(text);
+    let marks = shape::marks(tree, &toks);
+    let body = printer::print(text, &toks, &marks);
+    if text.starts_with(BOM) { format!("{BOM}{body}") } else { body }
+}
+
+/// The syntax tree written out without its spans: two files with the same shape mean the
+/// same thing (the checker sees nothing else of a file).
+pub fn tree_shape(tree: &ast::File) -> String {
+    without_spans(&format!("{tree:?}"))
+}
+
+/// A `{:?}` dump with every [`crate::Span`] in it replaced by `_`: what two trees or programs
+/// that differ only in where things were written have in common.
+pub fn without_spans(debug: &str) -> String {
+    const SPAN: &str = "Span { file: ";
+    let mut out = String::with_capacity(debug.len() / 2);
+    let mut rest = debug;
+    while let Some(at) = rest.find(SPAN) {
+        out.push_str(&rest[..at]);
+        out.push('_');
+        rest = &rest[at..];
+        rest = rest.find('}').map_or("", |end| &rest[end + 1..]);
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The comments of `text`, in order, as the formatter prints them (line comments without
+/// trailing white space).
+pub fn comments(text: &str) -> Vec<String> {
+    tokens::tokenize(text)
+        .iter()
+        .filter(|t| t.is_comment())
+        .map(|t| {
+            let c = &text[t.start..t.end];
+            if t.kind == tokens::Kind::LineComment {
+                c.trim_end().to_string()
+            } else {
+                c.replace("\r\n", "\n")
+            }
+        })
+        .collect()
+}
+
+fn floor(s: &str, mut at: usize) -> usize {
+    while !s.is_char_boundary(at) {
+        at -= 1;
+    }
+    at
+}
