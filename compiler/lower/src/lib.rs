@@ -45,6 +45,10 @@ pub enum Source {
     Param(String),
     /// The position of a template instance.
     Index,
+    /// The value of a `let` that several functions read: computed once, by a function of
+    /// its own (the layout makes it a node of its graph, see [`Lowerer::sharing`]), and read
+    /// here as `ty`. Named by the `let`'s number and digest (see `LetRef`'s `PartialEq`).
+    Let { id: u32, digest: u64 },
 }
 
 /// Why an expression could not be lowered (a construct the checker accepted but that has
@@ -82,6 +86,11 @@ pub struct Lowerer<'a> {
     /// Screen size, to turn `%` into pixels.
     screen: (f64, f64),
     depth: u32,
+    /// The `let`s read through a [`Source::Let`] slot instead of as locals ([`Lowerer::sharing`]).
+    shared: Option<Arc<HashSet<(u32, u64)>>>,
+    /// Each `let` read through a [`Source::Let`] slot, and as what, once each: who compiles
+    /// this function compiles theirs too.
+    pub shared_reads: Vec<(LetRef, jit::Ty)>,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -111,7 +120,38 @@ impl<'a> Lowerer<'a> {
             scope,
             screen,
             depth: 0,
+            shared: None,
+            shared_reads: Vec::new(),
         }
+    }
+
+    /// Reads the `let`s of `shared` (by number and digest) through [`Source::Let`] slots,
+    /// recorded in [`Lowerer::shared_reads`], instead of lowering them as locals: a `let`
+    /// that many functions read is then lowered and evaluated once, not once per function.
+    /// Only for `let`s whose value reads nothing but paths from the root (no parameter,
+    /// template variable, input, `self` or index): their value is the same for every reader.
+    pub fn sharing(mut self, shared: Arc<HashSet<(u32, u64)>>) -> Lowerer<'a> {
+        self.shared = Some(shared);
+        self
+    }
+
+    fn shared_slot(&mut self, l: &LetRef, ty: jit::Ty) -> Option<jit::Expr> {
+        let key = (l.id, l.digest);
+        if !self.shared.as_ref().is_some_and(|s| s.contains(&key)) {
+            return None;
+        }
+        let source = Source::Let { id: key.0, digest: key.1 };
+        let before = self.slots.len();
+        let e = self.slot(source, ty);
+        if self.slots.len() > before {
+            self.shared_reads.push((l.clone(), ty));
+        }
+        Some(e)
+    }
+
+    /// The screen size it was made for.
+    pub fn screen(&self) -> (f64, f64) {
+        self.screen
     }
 
     /// The function of `outputs` lowered by this lowerer, and its slots.
@@ -151,9 +191,11 @@ impl<'a> Lowerer<'a> {
     /// The local `let`s that `l` reads (through any `let`), `l` last, not yet lowered, each
     /// after those it reads. Iterative depth-first search.
     fn unlowered_lets(&self, l: &LetRef) -> Vec<LetRef> {
+        // A shared `let` is read through its slot: neither it nor what it reads is lowered here.
         let lowered = |x: &Let| {
             let t = value_ty(&x.value.ty).unwrap_or(jit::Ty::Num);
             self.local_of.contains_key(&(Local::Let(x as *const Let), t))
+                || self.shared.as_ref().is_some_and(|s| s.contains(&(x.id, x.digest)))
         };
         let mut order = Vec::new();
         let mut seen: HashSet<*const Let> = HashSet::new();
@@ -234,6 +276,7 @@ impl<'a> Lowerer<'a> {
                 let source = self.path_source(p)?;
                 self.slot(source, ty)
             }
+            Node::Let(l) if let Some(e) = self.shared_slot(l, ty) => e,
             Node::Let(l) if l.is_local() => self.let_local(l)?,
             // Its uses decide what it is read as: lowered where it is first read as `ty`
             // (its depth counts there, as `check_depth` counts it), then shared as a local.

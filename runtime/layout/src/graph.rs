@@ -12,12 +12,14 @@ use mocu_jit::{self as jit, Slot};
 use mocu_language::program::Program;
 use mocu_value::{Guid, PropName, Value};
 use parking_lot::Mutex;
-use std::collections::HashMap;
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashMap};
 use std::sync::{Arc, Weak};
 use std::time::Duration;
 
 mod compile;
 mod instances;
+mod lets;
 pub(crate) use compile::{
     Builder, CompiledWidget, CompiledWindow, FnRef, Frame, compile_template, compile_widget,
     compile_window,
@@ -119,11 +121,14 @@ pub(crate) enum Start {
     Object(Guid),
 }
 
+/// A value cells read: a path's (kept by its watch) or a shared `let`'s (written by its
+/// cell, the producer: `graph/lets.rs`).
 pub(crate) struct Node {
     watch: Option<PathWatch>,
     pub(crate) value: Option<Value>,
     deps: Vec<usize>,
     users: usize,
+    producer: Option<usize>,
 }
 
 /// What a function's input slot reads.
@@ -138,6 +143,8 @@ enum Input {
 #[derive(Clone, Debug)]
 pub(crate) enum Target {
     Prop(Guid, PropName),
+    /// A shared `let`'s node.
+    Node(usize),
     WatchWhen(usize),
     WatchClear(usize),
 }
@@ -149,11 +156,16 @@ pub(crate) struct Cell {
     last: Vec<Option<Value>>,
     dirty: bool,
     alive: bool,
+    /// 0 for a cell reading no shared `let`; else one more than the highest level of the
+    /// cells of the `let`s it reads: cells run in order of level, each once per tick.
+    level: u32,
 }
 
 pub(crate) struct State {
     pub(crate) nodes: Vec<Node>,
     node_ix: HashMap<(Start, Vec<String>, String), usize>,
+    /// The node of each shared `let` live now.
+    let_ix: HashMap<lets::LetKey, usize>,
     pub(crate) cells: Vec<Cell>,
     dirty: Vec<usize>,
     pub(crate) display: Guid,
@@ -164,6 +176,8 @@ pub(crate) struct State {
     pub(crate) windows: HashMap<String, Guid>,
     pub(crate) bindings: Vec<(String, Vec<CompiledAction>)>,
     pub(crate) evaluations: u64,
+    /// IR nodes compiled since load (see [`LayoutStats::ir_nodes`]).
+    pub(crate) ir_nodes: usize,
     pub(crate) closed: bool,
     /// The top-level items now live, for incremental reload.
     pub(crate) items: Vec<crate::reload::ItemRec>,
@@ -179,6 +193,11 @@ pub struct LayoutStats {
     /// Live cells.
     pub cells: usize,
     pub instances: usize,
+    /// Shared `let`s live now: each a node computed by a cell of its own (`graph/lets.rs`).
+    pub shared_lets: usize,
+    /// IR nodes compiled since load (every function lowered for the JIT or the
+    /// interpreter, summed): as large as the source, however many functions read a `let`.
+    pub ir_nodes: usize,
 }
 
 impl Layout {
@@ -201,6 +220,7 @@ impl Layout {
             state: Mutex::new(State {
                 nodes: Vec::new(),
                 node_ix: HashMap::new(),
+                let_ix: HashMap::new(),
                 cells: Vec::new(),
                 dirty: Vec::new(),
                 display,
@@ -211,6 +231,7 @@ impl Layout {
                 windows: HashMap::new(),
                 bindings: Vec::new(),
                 evaluations: 0,
+                ir_nodes: 0,
                 closed: false,
                 items: Vec::new(),
             }),
@@ -274,6 +295,8 @@ impl Layout {
             paths: st.nodes.iter().filter(|n| n.watch.is_some()).count(),
             cells: st.cells.iter().filter(|c| c.alive).count(),
             instances: st.instances.iter().flatten().count(),
+            shared_lets: st.let_ix.len(),
+            ir_nodes: st.ir_nodes,
         }
     }
 
@@ -374,7 +397,13 @@ impl Shared {
             Start::Root => self.ds.watch_path(path, Some(&self.exec), cb),
             Start::Object(g) => self.ds.watch_path_from(g, path, Some(&self.exec), cb),
         };
-        st.nodes.push(Node { watch: watch.ok(), value: None, deps: Vec::new(), users: 1 });
+        st.nodes.push(Node {
+            watch: watch.ok(),
+            value: None,
+            deps: Vec::new(),
+            users: 1,
+            producer: None,
+        });
         st.node_ix.insert(key, idx);
         idx
     }
@@ -398,8 +427,21 @@ impl Shared {
         }
     }
 
-    /// Binds a function to nodes and targets: a live cell.
+    /// Binds a function to nodes and targets: a live cell (and the cells of the shared
+    /// `let`s it reads, when they are not live yet).
     pub(crate) fn add_cell(
+        self: &Arc<Self>,
+        st: &mut State,
+        f: &FnRef,
+        targets: Vec<Target>,
+        instance: Option<usize>,
+    ) -> usize {
+        self.bind_lets(st, f);
+        self.bind_cell(st, f, targets, instance)
+    }
+
+    /// [`Shared::add_cell`] once the shared `let`s `f` reads are live.
+    fn bind_cell(
         self: &Arc<Self>,
         st: &mut State,
         f: &FnRef,
@@ -409,8 +451,21 @@ impl Shared {
         let idx = st.cells.len();
         let slots = f.slots().to_vec();
         let mut inputs = Vec::with_capacity(slots.len());
+        let mut level = 0;
         for (src, ty) in slots {
             let input = match &src {
+                Source::Let { id, digest } => match st.let_ix.get(&(*id, *digest, ty)) {
+                    Some(&n) => {
+                        let node = &mut st.nodes[n];
+                        node.users += 1;
+                        node.deps.push(idx);
+                        if let Some(p) = node.producer {
+                            level = level.max(st.cells[p].level + 1);
+                        }
+                        Input::Node(n)
+                    }
+                    None => Input::Absent, // `bind_lets` made them all
+                },
                 Source::Path { base, objects, property } => {
                     match Self::start_of(st, base, instance) {
                         Some(start) => {
@@ -434,23 +489,38 @@ impl Shared {
             last: vec![None; n],
             dirty: true,
             alive: true,
+            level,
         });
         st.dirty.push(idx);
         idx
     }
 
-    /// Ends a cell: it stops being evaluated and releases its paths.
+    /// Ends a cell: it stops being evaluated and releases its paths, and the shared
+    /// `let`s no other cell reads (their cells too, without recursion).
     pub(crate) fn remove_cell(&self, st: &mut State, idx: usize) {
-        let inputs = std::mem::take(&mut st.cells[idx].inputs);
-        st.cells[idx].alive = false;
-        for (input, _) in inputs {
-            if let Input::Node(n) = input {
-                let node = &mut st.nodes[n];
-                node.deps.retain(|&d| d != idx);
-                node.users -= 1;
-                if node.users == 0 {
-                    node.watch = None; // drops the watch: its subscriptions end
-                    st.node_ix.retain(|_, v| *v != n);
+        let mut ending = vec![idx];
+        while let Some(idx) = ending.pop() {
+            let inputs = std::mem::take(&mut st.cells[idx].inputs);
+            st.cells[idx].alive = false;
+            for (input, _) in inputs {
+                if let Input::Node(n) = input {
+                    let node = &mut st.nodes[n];
+                    node.deps.retain(|&d| d != idx);
+                    node.users -= 1;
+                    if node.users > 0 {
+                        continue;
+                    }
+                    match node.producer.take() {
+                        Some(p) => {
+                            st.let_ix.retain(|_, v| *v != n);
+                            node.value = None;
+                            ending.push(p);
+                        }
+                        None => {
+                            node.watch = None; // drops the watch: its subscriptions end
+                            st.node_ix.retain(|_, v| *v != n);
+                        }
+                    }
                 }
             }
         }
@@ -490,12 +560,17 @@ impl Shared {
         self.evaluate(&mut st);
     }
 
-    /// Evaluates every dirty cell once; writes only outputs that changed (early cutoff).
+    /// Evaluates every dirty cell once, in order of level (a shared `let`'s cell before its
+    /// readers); writes only outputs that changed (early cutoff).
     pub(crate) fn evaluate(self: &Arc<Self>, st: &mut State) {
-        let dirty = std::mem::take(&mut st.dirty);
+        let mut queue: BinaryHeap<Reverse<(u32, usize)>> = BinaryHeap::new();
         let mut slots = Vec::new();
         let mut outs = Vec::new();
-        for c in dirty {
+        loop {
+            for c in std::mem::take(&mut st.dirty) {
+                queue.push(Reverse((st.cells[c].level, c)));
+            }
+            let Some(Reverse((_, c))) = queue.pop() else { break };
             if !st.cells[c].alive || !st.cells[c].dirty {
                 continue;
             }
@@ -537,6 +612,13 @@ impl Shared {
 
     fn write_output(self: &Arc<Self>, st: &mut State, target: Target, v: Option<Value>) {
         match target {
+            Target::Node(n) => {
+                st.nodes[n].value = v;
+                for i in 0..st.nodes[n].deps.len() {
+                    let d = st.nodes[n].deps[i];
+                    mark(st, d);
+                }
+            }
             Target::Prop(obj, name) => {
                 let _ = match v {
                     Some(v) => self.ds.set(obj, name, v),
@@ -593,7 +675,8 @@ pub(crate) fn eval_once(
                 to_slot(v.as_ref(), *ty, &mut ctx)
             }
             Source::Input(_) => input.map_or(Slot::ABSENT, Slot::num),
-            Source::Index | Source::Param(_) => Slot::ABSENT,
+            // One-shot functions are lowered without shared `let`s (`Builder::lowerer`).
+            Source::Index | Source::Param(_) | Source::Let { .. } => Slot::ABSENT,
         })
         .collect();
     let types = eval.output_types(f.index).to_vec();

@@ -116,7 +116,7 @@ impl Shared {
         let lower = |e: crate::lower::LowerError| LoadError::Lower(e.to_string());
         let new = items(program);
         // 1. Compile what is new or changed (one compilation for all of it).
-        let mut b = Builder::new();
+        let mut b = Builder::sharing(program);
         let mut todo: Vec<(ItemKey, String, Compiled)> = Vec::new();
         let mut stats = ReloadStats::default();
         for (key, text, def) in &new {
@@ -148,7 +148,9 @@ impl Shared {
             };
             todo.push((key.clone(), text.clone(), c));
         }
+        let ir_nodes = b.ir_nodes;
         b.finish(self.config.jit)?;
+        st.ir_nodes += ir_nodes;
 
         // 2. Tear down what went or changed. A changed window keeps its object (and so the
         //    widgets in it); a removed window takes its widgets with it.

@@ -22,10 +22,10 @@ use std::time::Duration;
 /// Flags of a vehicle that say its data is old.
 pub const FLAGS: [&str; 2] = ["stale", "link_lost"];
 
-/// The vehicles (base and object names) the slots of `lw` read from.
-fn vehicles(lw: &Lowerer) -> Vec<(Base, Vec<String>)> {
+/// The vehicles (base and object names) `slots` read from.
+fn vehicles(slots: &[(Source, jit::Ty)]) -> Vec<(Base, Vec<String>)> {
     let mut out: Vec<(Base, Vec<String>)> = Vec::new();
-    for (src, _) in &lw.slots {
+    for (src, _) in slots {
         let Source::Path { base, objects, .. } = src else { continue };
         let v = match base {
             Base::Root if objects.len() >= 2 && objects[0] == "vehicles" => {
@@ -41,11 +41,12 @@ fn vehicles(lw: &Lowerer) -> Vec<(Base, Vec<String>)> {
     out
 }
 
-/// The `stale` output of a widget whose outputs were lowered with `lw`: absent flags count
-/// as fresh. `None` when the widget reads no vehicle.
-pub(crate) fn widget_stale(lw: &mut Lowerer) -> Option<jit::Expr> {
+/// The `stale` output of a widget whose outputs were lowered with `lw`, reading `through`
+/// (its slots and the vehicle paths it reads through shared `let`s, `graph/lets.rs`):
+/// absent flags count as fresh. `None` when the widget reads no vehicle.
+pub(crate) fn widget_stale(lw: &mut Lowerer, through: &[(Source, jit::Ty)]) -> Option<jit::Expr> {
     let mut out: Option<jit::Expr> = None;
-    for (base, objects) in vehicles(lw) {
+    for (base, objects) in vehicles(through) {
         for flag in FLAGS {
             let src = Source::Path {
                 base: base.clone(),

@@ -10,7 +10,7 @@
 
 use crate::actions::{ActionCtx, CompiledAction, compile_actions, operator_child, run_actions};
 use crate::graph::{Builder, FnRef, Shared, State, Target};
-use crate::lower::{Lowerer, Scope};
+use crate::lower::Scope;
 use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
 use mocu_jit as jit;
 use mocu_value::{Guid, Value, ValueKind};
@@ -35,7 +35,7 @@ pub(crate) fn compile_watch(
     let err = |e: crate::lower::LowerError| {
         crate::graph::LoadError::Lower(format!("watch `{}`: {e}", w.name))
     };
-    let mut lw = Lowerer::new(Scope::Plain, screen);
+    let mut lw = b.lowerer(Scope::Plain, screen);
     let mut outs = vec![lw.lower(&w.when.expr, jit::Ty::Bool).map_err(err)?];
     let clear = w.clear.as_ref();
     let has_clear = clear.is_some();

@@ -1,7 +1,9 @@
 //! `let`s are shared, not copied: long chains of `let`s, each built on the one before, and
 //! doubling ones (`let a1 = a0 + a0`, `let a2 = a1 + a1`, …, which copied into their uses
 //! would double per line) check clean, load into the runtime through the path `mocu run`
-//! takes, and compute what the source says, with the JIT and with the interpreter.
+//! takes, and compute what the source says, with the JIT and with the interpreter. A `let`
+//! that several widgets read is compiled and evaluated once (a node of the graph), so what
+//! is compiled stays as large as the source (counted in IR nodes, `LayoutStats::ir_nodes`).
 mod common;
 use common::program;
 use mocu_dataserver::*;
@@ -87,4 +89,109 @@ fn forty_doubling_untyped_lets_are_lowered_once_each() {
     let lets: String = (1..=40).map(|i| format!("let a{i} = a{0} ?? a{0}\n", i - 1)).collect();
     let want = Value::str("7.5");
     assert_eq!(shown(&layout(&lets, "a40"), 7.5), vec![want.clone(), want]);
+}
+
+/// A layout of `widgets` labels, label `i` showing `a{shows(i)}`, after a chain of `n`
+/// `let`s from the speed (`a{i} = a{i-1} + 1`).
+fn many_readers(n: usize, widgets: usize, shows: impl Fn(usize) -> usize) -> String {
+    let lets: String = (1..=n).map(|i| format!("let a{i} = a{} + 1\n", i - 1)).collect();
+    let labels: String = (0..widgets)
+        .map(|w| format!("  w{w}: Label {{ at 0 0  text \"{{a{}}}\" }}\n", shows(w)))
+        .collect();
+    format!(
+        "use \"stdlib/gauges.mocu\"\nlet a0 = root.vehicles.usv1.nav.speed\n{lets}\
+         window hud {{ layer 1  rect 0 0 100 100 }}\nin hud {{\n{labels}}}\n"
+    )
+}
+
+/// Loads `text` (JIT or interpreter), sets the speed twice, and returns the layout's
+/// statistics and what the labels named in `labels` show.
+fn load_and_read(text: &str, jit: bool, labels: &[String]) -> (LayoutStats, Vec<Value>) {
+    let program = program(text);
+    let ds = DataServer::default();
+    let config = LayoutConfig { tick: Duration::from_millis(1), jit, ..Default::default() };
+    let layout = Layout::load(&ds, &program, config, Arc::new(NullSink)).expect("loads");
+    let vs = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+    let v = ds.create_object(vs, ObjectInfo::new("usv1", "usv")).unwrap();
+    let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+    for speed in [1.0, 2.5] {
+        ds.set(nav, "speed", Value::Float(speed)).unwrap();
+        layout.settle();
+    }
+    let shown = labels
+        .iter()
+        .map(|l| {
+            let g = ds.resolve(&["display", "hud", l]).expect("label published");
+            ds.get(g, "text").unwrap()
+        })
+        .collect();
+    (layout.stats(), shown)
+}
+
+/// IR nodes compiled for `widgets` labels showing the end of a chain of `n` `let`s.
+fn ir_nodes(n: usize, widgets: usize) -> usize {
+    let (stats, _) = load_and_read(&many_readers(n, widgets, |_| n), false, &[]);
+    stats.ir_nodes
+}
+
+#[test]
+fn a_let_that_many_widgets_show_is_compiled_once_not_once_per_widget() {
+    // One label more costs its own function, not another copy of the 2,000-long chain.
+    let n = 2_000;
+    let (one, ten, hundred) = (ir_nodes(n, 1), ir_nodes(n, 10), ir_nodes(n, 100));
+    assert!(one >= n, "the chain itself is compiled: {one} IR nodes");
+    let per_label = (hundred - ten) / 90;
+    assert!(per_label < 100, "each label adds {per_label} IR nodes ({one}, {ten}, {hundred})");
+    assert!(hundred < one + 100 * 100, "100 labels: {hundred} IR nodes, 1 label: {one}");
+}
+
+#[test]
+fn labels_showing_every_let_of_a_chain_compile_in_linear_size() {
+    // Label i shows a{i}: every `let` is read by a label and by the next `let`, so each is
+    // a shared node of the graph; copied into each label this would be n²/2.
+    let n = 1_000;
+    let text = many_readers(n, n, |w| w + 1);
+    let labels: Vec<String> = (0..n).map(|w| format!("w{w}")).collect();
+    for jit in [false, true] {
+        let (stats, shown) = load_and_read(&text, jit, &labels);
+        assert!(stats.ir_nodes < 40 * n, "{} IR nodes for {n} lets and labels", stats.ir_nodes);
+        assert_eq!(stats.shared_lets, n - 1, "a1 … a{} are shared", n - 1);
+        let want: Vec<Value> =
+            (0..n).map(|w| Value::str(&format!("{}", 2.5 + (w + 1) as f64))).collect();
+        assert_eq!(shown, want, "jit: {jit}");
+    }
+}
+
+#[test]
+fn a_shared_let_is_evaluated_once_per_change_and_its_readers_once_each() {
+    // Two labels read a1 (shared); a third reads a0 and a1 (`a1 - a0` is always 1: no reader
+    // may see a new a0 with an old a1).
+    let text = "use \"stdlib/gauges.mocu\"\nlet a0 = root.vehicles.usv1.nav.speed\n\
+                let a1 = a0 + 1\nwindow hud { layer 1  rect 0 0 100 100 }\nin hud {\n\
+                x: Label { at 0 0  text \"{a1}\" }\n  y: Label { at 0 0  text \"{a1 * 2}\" }\n\
+                d: Label { at 0 0  text \"{a1 - a0}\" }\n}\n";
+    let program = program(text);
+    for jit in [false, true] {
+        let ds = DataServer::default();
+        let config = LayoutConfig { tick: Duration::from_millis(1), jit, ..Default::default() };
+        let layout = Layout::load(&ds, &program, config, Arc::new(NullSink)).unwrap();
+        let vs = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+        let v = ds.create_object(vs, ObjectInfo::new("usv1", "usv")).unwrap();
+        let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+        let d = ds.resolve(&["display", "hud", "d"]).unwrap();
+        let before = layout.stats();
+        assert_eq!(before.shared_lets, 1, "a1 is shared (a0 is a path: each reads it)");
+        ds.set(nav, "speed", Value::Float(4.0)).unwrap();
+        layout.settle();
+        let after = layout.stats();
+        assert_eq!(ds.get(d, "text").unwrap(), Value::str("1"));
+        // a1's cell, x, y and d: once each.
+        assert_eq!(after.evaluations - before.evaluations, 4, "jit: {jit}");
+        let x = ds.resolve(&["display", "hud", "x"]).unwrap();
+        assert_eq!(ds.get(x, "text").unwrap(), Value::str("5"));
+        // Absent stays absent through the node.
+        ds.delete_property(nav, "speed").unwrap();
+        layout.settle();
+        assert_eq!(ds.get(x, "text").unwrap(), Value::str("—"), "jit: {jit}");
+    }
 }

@@ -15,6 +15,13 @@ use std::sync::Arc;
 /// A function before binding: its slots and output targets by name.
 pub(crate) struct FuncInfo {
     pub(crate) slots: Vec<(Source, jit::Ty)>,
+    /// The shared `let`s it reads ([`Source::Let`] slots), each with its function's index
+    /// in the same compilation (`lets.rs`).
+    pub(crate) lets: Vec<(super::lets::LetKey, usize)>,
+    /// The shared `let` whose value it computes, if it is one's function.
+    pub(crate) produces: Option<super::lets::LetKey>,
+    /// The vehicle paths it reads through shared `let`s as well as itself (`stale.rs`).
+    pub(crate) through: Vec<(Source, jit::Ty)>,
 }
 
 #[derive(Clone)]
@@ -77,6 +84,11 @@ impl FnRef {
     pub(crate) fn slots(&self) -> &[(Source, jit::Ty)] {
         &self.code.infos.get().expect("finished")[self.index].slots
     }
+
+    /// Its slots and the vehicle paths it reads through shared `let`s (`stale.rs`).
+    pub(crate) fn through(&self) -> &[(Source, jit::Ty)] {
+        &self.code.infos.get().expect("finished")[self.index].through
+    }
 }
 
 /// Collects functions while compiling a layout.
@@ -84,6 +96,14 @@ pub(crate) struct Builder {
     pub(crate) code: Arc<Code>,
     pub(crate) functions: Vec<jit::Function>,
     pub(crate) infos: Vec<FuncInfo>,
+    /// The `let`s read through nodes of the graph (`lets.rs`), by number and digest.
+    pub(crate) shared: Arc<std::collections::HashSet<(u32, u64)>>,
+    /// The functions of the shared `let`s compiled so far.
+    pub(crate) let_fns: std::collections::HashMap<super::lets::LetKey, super::lets::LetFn>,
+    /// The first error met while adding a function (reported by [`Builder::finish`]).
+    failed: Option<LoadError>,
+    /// IR nodes of every function added ([`jit::Expr::size`]).
+    pub(crate) ir_nodes: usize,
 }
 
 impl Builder {
@@ -96,18 +116,63 @@ impl Builder {
             }),
             functions: Vec::new(),
             infos: Vec::new(),
+            shared: Arc::default(),
+            let_fns: std::collections::HashMap::new(),
+            failed: None,
+            ir_nodes: 0,
         }
     }
 
+    /// A builder that shares the `let`s of `program` that several functions read
+    /// (`lets.rs`): the functions lowered with [`Builder::lowerer`] read them through nodes.
+    pub(crate) fn sharing(program: &Program) -> Builder {
+        Builder { shared: super::lets::shared_lets(program), ..Builder::new() }
+    }
+
+    /// Adds a function, and the functions of the shared `let`s it reads (an error there is
+    /// reported by [`Builder::finish`]). `screen`: as `lw` was made with.
     pub(crate) fn add(&mut self, lw: Lowerer, outputs: Vec<jit::Expr>) -> FnRef {
+        let through = match lw.shared_reads.is_empty() {
+            true => lw.slots.clone(),
+            false => match self.share(&lw, lw.screen()) {
+                Ok(t) => t,
+                Err(e) => {
+                    self.failed.get_or_insert(e);
+                    Vec::new()
+                }
+            },
+        };
+        let index = self.push_fn(lw, outputs, None, through);
+        FnRef { code: self.code.clone(), index }
+    }
+
+    pub(crate) fn push_fn(
+        &mut self,
+        lw: Lowerer,
+        outputs: Vec<jit::Expr>,
+        produces: Option<super::lets::LetKey>,
+        through: Vec<(Source, jit::Ty)>,
+    ) -> usize {
+        let lets = lw
+            .shared_reads
+            .iter()
+            .filter_map(|(l, t)| {
+                let key = (l.id, l.digest, *t);
+                self.let_fns.get(&key).map(|f| (key, f.index))
+            })
+            .collect();
         let (f, slots) = lw.finish(outputs);
+        self.ir_nodes += f.locals.iter().chain(&f.outputs).map(jit::Expr::size).sum::<usize>();
         self.functions.push(f);
-        self.infos.push(FuncInfo { slots });
-        FnRef { code: self.code.clone(), index: self.functions.len() - 1 }
+        self.infos.push(FuncInfo { slots, lets, produces, through });
+        self.functions.len() - 1
     }
 
     /// Compiles everything added (Cranelift, or the interpreter).
     pub(crate) fn finish(self, use_jit: bool) -> Result<(), LoadError> {
+        if let Some(e) = self.failed {
+            return Err(e);
+        }
         let eval: Arc<dyn Evaluate> = if use_jit {
             Arc::new(jit::compile(&self.functions).map_err(|e| LoadError::Compile(e.to_string()))?)
         } else {
@@ -199,7 +264,7 @@ pub(crate) fn compile_window(
     frame: Frame,
 ) -> Result<CompiledWindow, LoadError> {
     let screen = frame.screen;
-    let mut lw = Lowerer::new(Scope::Plain, screen);
+    let mut lw = b.lowerer(Scope::Plain, screen);
     let mut outs = vec![lw.lower(&w.layer.expr, jit::Ty::Num).map_err(lower_err)?];
     let mut parent = |_: &mut Lowerer, horizontal: bool| {
         Ok(jit::Expr::Num(if horizontal { screen.0 } else { screen.1 }))
@@ -233,7 +298,7 @@ pub(crate) fn compile_widget(
     window: Option<&Window>,
 ) -> Result<CompiledWidget, LoadError> {
     let screen = frame.screen;
-    let mut lw = Lowerer::new(Scope::Widget { args: &w.args, at: &w.at }, screen);
+    let mut lw = b.lowerer(Scope::Widget { args: &w.args, at: &w.at }, screen);
     let mut outs = Vec::new();
     let mut names = Vec::new();
     let mut parent = |lw: &mut Lowerer, horizontal: bool| {
@@ -282,7 +347,8 @@ pub(crate) fn compile_widget(
             }
         }
     }
-    if let Some(stale) = crate::stale::widget_stale(&mut lw) {
+    let through = b.share(&lw, screen)?;
+    if let Some(stale) = crate::stale::widget_stale(&mut lw, &through) {
         outs.push(stale);
         names.push("stale".into());
     }
