@@ -146,6 +146,21 @@ fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
     assert_eq!(ds.meta(nav, "alt").unwrap().units.as_deref(), Some("m"));
     assert_eq!(ds.get(v, "mode").unwrap(), Value::str("STABILIZE"));
     assert_eq!(ds.get(v, "armed").unwrap(), Value::Bool(false));
+    // Every telemetry value declares a rate (a display ages it after three periods without
+    // a write), none above what this peer streams (mav_vehicle.py: SYS_STATUS 1 Hz, the
+    // rest 10 Hz): its fresh telemetry is never taken as stale.
+    for (g, p, peer_hz) in [
+        (nav, "speed", 10.0),
+        (nav, "heading", 10.0),
+        (nav, "roll", 10.0),
+        (nav, "throttle", 10.0),
+        (nav, "satellites", 10.0),
+        (v, "fuel", 1.0),
+        (v, "battery_v", 1.0),
+    ] {
+        let hz = ds.meta(g, p).unwrap().rate_hz.unwrap_or_else(|| panic!("{p} declares a rate"));
+        assert!(hz <= peer_hz, "{p}: declared {hz} Hz, the peer sends {peer_hz} Hz");
+    }
 
     // Commands go only to an address that proved itself with heartbeats in sequence.
     wait_for(&ds, &[Topic::properties(v)], "the vehicle's address verified", || {

@@ -14,10 +14,10 @@
 
 use crate::actions::{ActionCtx, CompiledAction, operator_child};
 use crate::graph::{LoadError, Shared, State};
-use mocu_dataserver::{CallOutcome, DataServer, MethodSpec, ObjectInfo};
+use mocu_dataserver::{CallOutcome, DataServer, MethodSpec, ObjectInfo, SubscriptionId, Topic};
 use mocu_language::program::Program;
 use mocu_value::{Guid, Value};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 /// The built-in alert window's name under `root.display`.
 pub const WINDOW: &str = "alert_layer";
@@ -133,11 +133,12 @@ pub(crate) fn ensure_layer(sh: &Arc<Shared>, st: &mut State, program: &Program) 
     }
     if let Ok(g) = publish_layer(ds, st.display, sh.config.screen) {
         st.owned_push(g);
+        follow(sh, st.display, g);
     }
 }
 
-/// The built-in window: the full width of the screen, as tall as five alert rows; what the
-/// layer does not draw stays transparent and lets the pointer through.
+/// The built-in window: placed by [`place_layer`] once the widgets' positions are known;
+/// what the layer does not draw stays transparent and lets the pointer through.
 fn publish_layer(ds: &DataServer, display: Guid, screen: (f64, f64)) -> Result<Guid, LoadError> {
     let world = |e: mocu_dataserver::DsError| LoadError::World(e.to_string());
     let (w, h) = (screen.0, screen.1.min(ROWS_HEIGHT));
@@ -157,56 +158,196 @@ fn publish_layer(ds: &DataServer, display: Guid, screen: (f64, f64)) -> Result<G
     let _ = ds.set(wg, "component", Value::str(COMPONENT));
     let _ = ds.set(wg, "native", Value::Bool(true));
     let _ = ds.set(wg, "order", Value::Int(0));
-    for (k, v) in [("x", 0.0), ("y", 0.0), ("w", w), ("h", h)] {
+    for (k, v) in [("x", 0.0), ("y", 0.0), ("w", w), ("h", h), ("scale", 1.0)] {
         let _ = ds.set(wg, k, Value::Float(v));
     }
     Ok(g)
 }
 
-/// Height of the built-in window: a count line and four alert rows.
+/// The built-in window's geometry in the layer's own px (times its scale on screen): the
+/// widest box (alert rows at most `MAX_W` wide, 8 px margins), the narrowest it may shrink
+/// to, and its height: a count line and four rows, at least a count line and two rows.
+const MAX_W: f64 = 696.0;
+const MIN_W: f64 = 336.0;
 const ROWS_HEIGHT: f64 = 200.0;
+const MIN_HEIGHT: f64 = 128.0;
 
-/// The top band the built-in window stays below: the state header and the heading tape.
+/// The top band kept clear when nothing else is free: the state header and the heading tape.
 pub const BELOW: [&str; 2] = ["StatusHeader", "HeadingTape"];
-/// Space between the band and the window, px.
+/// Space between the window and what it avoids, px.
 const BAND_GAP: f64 = 6.0;
 
-/// Moves the built-in window below the top band — the lowest bottom edge of the evaluated
-/// [`BELOW`] widgets in the top half of the screen — so that alerts never cover the state
-/// header or the heading tape; it keeps [`ROWS_HEIGHT`] on screen. Runs after each load
-/// and reload has evaluated the widgets' positions.
+/// A rectangle on the screen: x, y, w, h.
+type Area = [f64; 4];
+
+fn overlaps(a: Area, b: Area) -> bool {
+    a[0] < b[0] + b[2] && b[0] < a[0] + a[2] && a[1] < b[1] + b[3] && b[1] < a[1] + a[3]
+}
+
+/// Places the built-in window where it covers nothing of the layout: the highest spot,
+/// nearest the screen's centre line, where a box as wide as possible (shrinking to
+/// [`MIN_W`]) and at least [`MIN_HEIGHT`] tall overlaps no widget of a full-screen window
+/// (hidden widgets too: a banner may show later) and no smaller window (a strip, a
+/// picture-in-picture video, a map); it then grows down to [`ROWS_HEIGHT`] while free. The
+/// layer draws at the display's design scale, at least 1 (text stays ≥ 12 px). When no spot
+/// is free it goes below the top band (the lowest [`BELOW`] widget in the top half), so
+/// that it never covers the state header or the heading tape. Runs after each load and
+/// reload has evaluated the widgets' positions.
 pub(crate) fn place_layer(sh: &Shared, st: &State) {
+    if let Some(layer) = sh.ds.find_child(st.display, WINDOW).ok().flatten() {
+        place(&sh.ds, st.display, layer, sh.config.screen);
+    }
+}
+
+/// Places the window again whenever an alert is raised or acknowledged and whenever a
+/// window comes or goes (a vehicle's strip appears after the layout loaded), until the
+/// window is gone.
+fn follow(sh: &Arc<Shared>, display: Guid, layer: Guid) {
+    let Some(folder) = alerts_folder(sh) else { return };
     let ds = &sh.ds;
-    let Some(layer) = ds.find_child(st.display, WINDOW).ok().flatten() else { return };
-    let screen_h = sh.config.screen.1;
+    let exec = ds.serial_executor();
+    let screen = sh.config.screen;
+    for topic in [Topic::properties(folder), Topic::children(display)] {
+        let id = Arc::new(OnceLock::<SubscriptionId>::new());
+        let (ds2, id2) = (ds.clone(), id.clone());
+        let sub = ds.subscribe_on(&exec, topic, move |_| {
+            if ds2.info(layer).is_err() {
+                if let Some(id) = id2.get() {
+                    ds2.unsubscribe_nowait(*id);
+                }
+                return;
+            }
+            place(&ds2, display, layer, screen);
+        });
+        if let Ok(sub) = sub {
+            let _ = id.set(sub);
+        }
+    }
+}
+
+fn place(ds: &DataServer, display: Guid, layer: Guid, screen: (f64, f64)) {
+    let (sw, sh_) = screen;
     let num = |g: Guid, k: &str| ds.try_get(g, k.into()).and_then(|v| v.as_f64());
-    let mut band: f64 = 0.0;
-    for win in ds.children(st.display).unwrap_or_default() {
+    let s = num(display, "scale").filter(|s| s.is_finite()).unwrap_or(1.0).max(1.0);
+    let (obstacles, band) = obstacles(ds, display, layer, (sw, sh_));
+    let step = 4.0;
+    let widest = (MAX_W * s).min((sw * 0.6).max(436.0 * s)).min(sw);
+    let narrowest = (MIN_W * s).min(sw);
+    let (min_h, max_h) = ((MIN_HEIGHT * s).min(sh_), (ROWS_HEIGHT * s).min(sh_));
+    let free = |a: Area| a[1] + a[3] <= sh_ && !obstacles.iter().any(|o| overlaps(a, *o));
+    let mut spot = None;
+    let mut w = widest;
+    'width: while w >= narrowest - 0.5 {
+        let mut y = 0.0;
+        while y + min_h <= sh_ {
+            if let Some(x) = free_x(&obstacles, y, min_h, w, sw) {
+                spot = Some((x, y, w));
+                break 'width;
+            }
+            y += step;
+        }
+        w -= 32.0 * s;
+    }
+    let (x, y, w, h) = match spot {
+        Some((x, y, w)) => {
+            let mut h = min_h;
+            while h + step <= max_h && free([x, y, w, h + step]) {
+                h += step;
+            }
+            (x, y, w, h)
+        }
+        None => {
+            let y = if band > 0.0 { band + BAND_GAP } else { 0.0 };
+            let y = y.min((sh_ - max_h).max(0.0));
+            (((sw - widest) / 2.0).max(0.0), y, widest, (sh_ - y).min(max_h))
+        }
+    };
+    let (x, y, w, h) = (x.round(), y.round(), w.round(), h.round());
+    let wg = ds.find_child(layer, "alerts").ok().flatten();
+    let same =
+        [("x", x), ("y", y), ("w", w), ("h", h)].iter().all(|(k, v)| num(layer, k) == Some(*v))
+            && wg.is_some_and(|g| num(g, "scale") == Some(s));
+    if same {
+        return;
+    }
+    for (k, v) in [("x", x), ("y", y), ("w", w), ("h", h)] {
+        let _ = ds.set(layer, k, Value::Float(v));
+    }
+    if let Some(wg) = wg {
+        for (k, v) in [("x", 0.0), ("y", 0.0), ("w", w), ("h", h), ("scale", s)] {
+            let _ = ds.set(wg, k, Value::Float(v));
+        }
+    }
+}
+
+/// The left edge nearest the screen's centre line of a free box `w` wide over rows
+/// `y .. y + h`, if there is one.
+fn free_x(obstacles: &[Area], y: f64, h: f64, w: f64, sw: f64) -> Option<f64> {
+    let mut blocked: Vec<(f64, f64)> = obstacles
+        .iter()
+        .filter(|o| o[1] < y + h && y < o[1] + o[3])
+        .map(|o| (o[0], o[0] + o[2]))
+        .collect();
+    blocked.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let centre = ((sw - w) / 2.0).round();
+    let (mut best, mut from): (Option<f64>, f64) = (None, 0.0);
+    let mut consider = |lo: f64, hi: f64| {
+        if hi - lo >= w {
+            let x = centre.clamp(lo, hi - w);
+            if best.is_none_or(|b| (x - centre).abs() < (b - centre).abs()) {
+                best = Some(x);
+            }
+        }
+    };
+    for (a, b) in blocked {
+        consider(from, a.min(sw));
+        from = from.max(b);
+    }
+    consider(from, sw);
+    best
+}
+
+/// What the built-in window must not cover, on the screen (with [`BAND_GAP`] around each),
+/// and the bottom of the top band ([`BELOW`] widgets in the top half; 0 without any).
+fn obstacles(ds: &DataServer, display: Guid, layer: Guid, screen: (f64, f64)) -> (Vec<Area>, f64) {
+    let num = |g: Guid, k: &str| ds.try_get(g, k.into()).and_then(|v| v.as_f64());
+    let area = |g: Guid| -> Option<Area> {
+        Some([num(g, "x")?, num(g, "y")?, num(g, "w").unwrap_or(0.0), num(g, "h").unwrap_or(0.0)])
+    };
+    let pad =
+        |a: Area| [a[0] - BAND_GAP, a[1] - BAND_GAP, a[2] + 2.0 * BAND_GAP, a[3] + 2.0 * BAND_GAP];
+    let (mut out, mut band) = (Vec::new(), 0.0_f64);
+    for win in ds.children(display).unwrap_or_default() {
         if win == layer || ds.try_get(win, "visible".into()) == Some(Value::Bool(false)) {
             continue;
         }
-        let wy = num(win, "y").unwrap_or(0.0);
-        for w in ds.children(win).unwrap_or_default() {
+        let Some(wr) = area(win) else { continue };
+        let widgets: Vec<Guid> = ds
+            .children(win)
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|w| ds.try_get(*w, "component".into()).is_some())
+            .collect();
+        // A window of less than half the screen is one piece; a larger one is a background
+        // (a video, a map) or holds a HUD's widgets.
+        if wr[2] * wr[3] < screen.0 * screen.1 * 0.5 {
+            out.push(pad(wr));
+        }
+        for w in widgets {
+            let Some(r) = area(w) else { continue };
+            // A widget without a size (a label at a point): about a line of text.
+            let r = if r[2] <= 0.0 || r[3] <= 0.0 { [r[0], r[1], 120.0, 24.0] } else { r };
+            let on_screen = [wr[0] + r[0], wr[1] + r[1], r[2], r[3]];
+            out.push(pad(on_screen));
             let comp = ds.try_get(w, "component".into());
-            if !comp.as_ref().and_then(Value::as_str).is_some_and(|c| BELOW.contains(&c)) {
-                continue;
-            }
-            let (Some(y), Some(h)) = (num(w, "y"), num(w, "h")) else { continue };
-            if wy + y < screen_h / 2.0 {
-                band = band.max(wy + y + h);
+            if comp.as_ref().and_then(Value::as_str).is_some_and(|c| BELOW.contains(&c))
+                && on_screen[1] < screen.1 / 2.0
+            {
+                band = band.max(on_screen[1] + on_screen[3]);
             }
         }
     }
-    let y = if band > 0.0 { band + BAND_GAP } else { 0.0 };
-    let y = y.min((screen_h - ROWS_HEIGHT).max(0.0)).round();
-    let h = (screen_h - y).min(ROWS_HEIGHT);
-    if num(layer, "y") != Some(y) || num(layer, "h") != Some(h) {
-        let _ = ds.set(layer, "y", Value::Float(y));
-        let _ = ds.set(layer, "h", Value::Float(h));
-        if let Some(wg) = ds.find_child(layer, "alerts").ok().flatten() {
-            let _ = ds.set(wg, "h", Value::Float(h));
-        }
-    }
+    (out, band)
 }
 
 /// Escape (keyboard) and `select` (gamepad) acknowledge every alert, unless the layout binds

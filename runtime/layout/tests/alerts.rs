@@ -32,9 +32,14 @@ fn a_layout_without_an_alert_layer_gets_the_built_in_one_on_top() {
     let win = ds.resolve(&["display", "alert_layer"]).expect("the built-in alert window");
     assert_eq!(ds.info(win).unwrap().subtype.as_ref(), "widgets");
     assert_eq!(ds.get(win, "layer").unwrap(), Value::Float(1000.0));
-    assert_eq!(ds.get(win, "w").unwrap(), Value::Float(1920.0), "the screen's width");
+    // Nothing at the top centre: there, 680 px of rows and 8 px margins, four rows tall.
+    let geometry = |g: Guid| ["x", "y", "w", "h"].map(|k| ds.get(g, k).unwrap());
+    let f = Value::Float;
+    assert_eq!(geometry(win), [f(612.0), f(0.0), f(696.0), f(200.0)]);
     let w = ds.resolve(&["display", "alert_layer", "alerts"]).expect("its widget");
     assert_eq!(ds.get(w, "component").unwrap(), Value::str("AlertLayer"));
+    assert_eq!(geometry(w), [f(0.0), f(0.0), f(696.0), f(200.0)]);
+    assert_eq!(ds.get(w, "scale").unwrap(), f(1.0));
     drop(layout);
     assert_eq!(ds.resolve(&["display", "alert_layer"]), None, "unloaded with the layout");
 }
@@ -138,4 +143,55 @@ fn a_watch_alert_is_critical_in_the_world_model_with_its_text() {
     assert_eq!(text(&ds, a, "text"), "Link lost");
     assert_eq!(text(&ds, a, "source"), "layout");
     assert_eq!(unacknowledged(&ds), Value::Int(1));
+}
+
+/// The rectangles (x, y, w, h) of the built-in alert window and of widget `name` in `hud`.
+fn layer_and(ds: &DataServer, name: &str) -> ([f64; 4], [f64; 4]) {
+    let rect = |g: Guid| ["x", "y", "w", "h"].map(|k| ds.get(g, k).unwrap().as_f64().unwrap());
+    let layer = ds.resolve(&["display", "alert_layer"]).expect("the built-in alert window");
+    (rect(layer), rect(ds.resolve(&["display", "hud", name]).unwrap()))
+}
+
+fn overlap(a: [f64; 4], b: [f64; 4]) -> bool {
+    a[0] < b[0] + b[2] && b[0] < a[0] + a[2] && a[1] < b[1] + b[3] && b[1] < a[1] + a[3]
+}
+
+#[test]
+fn the_built_in_alert_window_moves_off_widgets_at_the_top_centre_and_shrinks_to_a_free_gap() {
+    let ds = DataServer::default();
+    // A readout at the top centre and panels down both sides leave a gap 800 px wide.
+    let text = r#"
+use "stdlib/gauges.mocu"
+window hud { layer 10 rect 0 0 100% 100% }
+in hud {
+  readout: TextGauge { at 660 10 600 60  label "SPD"  value 3 }
+  left: TextGauge { at 0 0 560 1080  label "L"  value 1 }
+  right: TextGauge { at 1360 0 560 1080  label "R"  value 2 }
+}
+"#;
+    let layout = Layout::load(&ds, &program(text), config(), Arc::new(NullSink)).unwrap();
+    layout.settle();
+    let (layer, readout) = layer_and(&ds, "readout");
+    assert!(!overlap(layer, readout), "{layer:?} covers {readout:?}");
+    assert!(layer[1] >= 70.0 && layer[1] <= 90.0, "just below the readout: {layer:?}");
+    assert!(layer[0] >= 560.0 && layer[0] + layer[2] <= 1360.0, "in the gap: {layer:?}");
+    assert_eq!(layer[3], 200.0, "four rows tall");
+}
+
+#[test]
+fn with_a_design_the_built_in_alert_layer_grows_with_the_screen_but_never_below_one() {
+    let text = "design 800 x 480\nwindow hud { layer 10 rect 0 0 100% 100% }\n";
+    for (screen, scale) in [((3840.0, 2160.0), 4.5), ((1280.0, 720.0), 1.5), ((400.0, 240.0), 1.0)]
+    {
+        let ds = DataServer::default();
+        let cfg = LayoutConfig { screen, ..config() };
+        let layout = Layout::load(&ds, &program(text), cfg, Arc::new(NullSink)).unwrap();
+        layout.settle();
+        let w = ds.resolve(&["display", "alert_layer", "alerts"]).unwrap();
+        assert_eq!(ds.get(w, "scale").unwrap(), Value::Float(scale), "{screen:?}");
+        let win = ds.resolve(&["display", "alert_layer"]).unwrap();
+        let n = |k: &str| ds.get(win, k).unwrap().as_f64().unwrap();
+        assert_eq!(n("h"), (200.0 * scale).min(screen.1), "{screen:?}");
+        assert!(n("x") >= 0.0 && n("x") + n("w") <= screen.0, "{screen:?}: on the screen");
+    }
 }

@@ -13,6 +13,16 @@ use std::time::Instant;
 
 /// The heartbeat rate the MAVLink spec asks of every system (Hz).
 const HEARTBEAT_HZ: f64 = 1.0;
+/// The rates (Hz) declared on the telemetry each message writes (`PropMeta::rate_hz`): the
+/// least the autopilots' default streams send — ArduPilot's `SRn_*` stream rates and PX4's
+/// telemetry profiles send GLOBAL_POSITION_INT, ATTITUDE and VFR_HUD at 2 Hz or more on
+/// every link, SYS_STATUS and GPS_RAW_INT at 1 Hz or more. A display takes a value as stale
+/// after three periods without a write (docs/display.md): one a vehicle stopped sending.
+pub(crate) const POSITION_HZ: f64 = 2.0;
+pub(crate) const ATTITUDE_HZ: f64 = 2.0;
+pub(crate) const VFR_HUD_HZ: f64 = 2.0;
+pub(crate) const SYS_STATUS_HZ: f64 = 1.0;
+pub(crate) const GPS_RAW_HZ: f64 = 1.0;
 
 pub(crate) struct Pending {
     pub id: u64,
@@ -20,7 +30,6 @@ pub(crate) struct Pending {
     pub msg: MavMessage,
     pub attempts: u32,
     pub responder: Responder,
-    pub label: &'static str,
 }
 
 pub(crate) struct Upload {
@@ -129,9 +138,11 @@ impl Link {
                 (
                     "fuel",
                     Value::Float(0.0),
-                    float_in("fraction", 0.0, 1.0).describe("battery remaining, 0..1"),
+                    float_in("fraction", 0.0, 1.0)
+                        .describe("battery remaining, 0..1")
+                        .rate(SYS_STATUS_HZ),
                 ),
-                ("battery_v", Value::Float(0.0), float("V")),
+                ("battery_v", Value::Float(0.0), float("V").rate(SYS_STATUS_HZ)),
                 // Written at each heartbeat (1 Hz by the MAVLink spec): a display takes them as
                 // stale after three missed ones (`PropMeta::rate_hz`, docs/display.md).
                 ("armed", Value::Bool(false), boolean().rate(HEARTBEAT_HZ)),
@@ -153,7 +164,11 @@ impl Link {
                 ("system_status", Value::str(""), string().rate(HEARTBEAT_HZ)),
                 ("system_status_raw", raw(hb.system_status.raw), int("").describe("MAV_STATE")),
                 ("control", Value::str(""), string()),
-                ("drop_rate", Value::Float(0.0), float_in("fraction", 0.0, 1.0)),
+                (
+                    "drop_rate",
+                    Value::Float(0.0),
+                    float_in("fraction", 0.0, 1.0).rate(SYS_STATUS_HZ),
+                ),
             ],
         )?;
         let nav = ds.create_object(guid, ObjectInfo::new("nav", "nav"))?;
@@ -161,25 +176,26 @@ impl Link {
             ds,
             nav,
             vec![
-                ("speed", Value::Float(0.0), float("m/s")),
-                ("heading", Value::Float(0.0), float_in("deg", 0.0, 360.0)),
-                ("x", Value::Float(0.0), float("m")),
-                ("y", Value::Float(0.0), float("m")),
-                ("lat", Value::Float(0.0), float_in("deg", -90.0, 90.0)),
-                ("lon", Value::Float(0.0), float_in("deg", -180.0, 180.0)),
-                ("alt", Value::Float(0.0), float("m").describe("above home")),
-                ("alt_msl", Value::Float(0.0), float("m")),
-                ("roll", Value::Float(0.0), float("deg")),
-                ("pitch", Value::Float(0.0), float("deg")),
-                ("yaw", Value::Float(0.0), float("deg")),
-                ("climb", Value::Float(0.0), float("m/s")),
-                ("airspeed", Value::Float(0.0), float("m/s")),
-                ("groundspeed", Value::Float(0.0), float("m/s")),
-                ("throttle", Value::Float(0.0), float("%")),
-                ("gps_fix", Value::str(""), string()),
-                ("gps_fix_raw", Value::Int(0), int("").describe("GPS_FIX_TYPE")),
-                ("satellites", Value::Int(0), int("")),
-                ("hdop", Value::Float(0.0), float("")),
+                ("speed", Value::Float(0.0), float("m/s").rate(POSITION_HZ)),
+                ("heading", Value::Float(0.0), float_in("deg", 0.0, 360.0).rate(POSITION_HZ)),
+                ("x", Value::Float(0.0), float("m").rate(POSITION_HZ)),
+                ("y", Value::Float(0.0), float("m").rate(POSITION_HZ)),
+                ("lat", Value::Float(0.0), float_in("deg", -90.0, 90.0).rate(POSITION_HZ)),
+                ("lon", Value::Float(0.0), float_in("deg", -180.0, 180.0).rate(POSITION_HZ)),
+                ("alt", Value::Float(0.0), float("m").describe("above home").rate(POSITION_HZ)),
+                ("alt_msl", Value::Float(0.0), float("m").rate(POSITION_HZ)),
+                ("roll", Value::Float(0.0), float("deg").rate(ATTITUDE_HZ)),
+                ("pitch", Value::Float(0.0), float("deg").rate(ATTITUDE_HZ)),
+                ("yaw", Value::Float(0.0), float("deg").rate(ATTITUDE_HZ)),
+                // Written by GLOBAL_POSITION_INT and VFR_HUD alike.
+                ("climb", Value::Float(0.0), float("m/s").rate(POSITION_HZ)),
+                ("airspeed", Value::Float(0.0), float("m/s").rate(VFR_HUD_HZ)),
+                ("groundspeed", Value::Float(0.0), float("m/s").rate(VFR_HUD_HZ)),
+                ("throttle", Value::Float(0.0), float("%").rate(VFR_HUD_HZ)),
+                ("gps_fix", Value::str(""), string().rate(GPS_RAW_HZ)),
+                ("gps_fix_raw", Value::Int(0), int("").describe("GPS_FIX_TYPE").rate(GPS_RAW_HZ)),
+                ("satellites", Value::Int(0), int("").rate(GPS_RAW_HZ)),
+                ("hdop", Value::Float(0.0), float("").rate(GPS_RAW_HZ)),
             ],
         )?;
         ds.create_object(guid, ObjectInfo::new("cameras", "cameras"))?;

@@ -362,17 +362,34 @@ fn a_command_acknowledged_with_a_result_newer_than_the_dialect_is_refused_with_i
 }
 
 /// What each heartbeat writes declares the heartbeat's rate (1 Hz), so that a display takes
-/// it as stale after three missed heartbeats; telemetry whose rate the vehicle chooses
-/// declares none.
+/// it as stale after three missed heartbeats; the telemetry each message writes declares
+/// the least rate autopilots stream that message at (position, attitude, VFR_HUD 2 Hz;
+/// SYS_STATUS and GPS_RAW_INT 1 Hz): a stream that stops goes stale while the link lives.
 #[test]
-fn heartbeat_properties_declare_one_hertz_and_telemetry_declares_no_rate() {
+fn heartbeat_properties_declare_one_hertz_and_telemetry_the_rate_of_its_message() {
     let w = world(LinkConfig::default(), None);
     w.link.ingest(&quad(7, 0), None);
     let v = w.vehicle("mav7");
     for p in ["armed", "engine", "mode", "system_status", "link"] {
         assert_eq!(w.ds.meta(v, p).unwrap().rate_hz, Some(1.0), "{p}");
     }
-    assert_eq!(w.ds.meta(v, "fuel").unwrap().rate_hz, None);
+    for p in ["fuel", "battery_v", "drop_rate"] {
+        assert_eq!(w.ds.meta(v, p).unwrap().rate_hz, Some(1.0), "SYS_STATUS: {p}");
+    }
     let nav = w.ds.resolve(&["vehicles", "mav7", "nav"]).unwrap();
-    assert_eq!(w.ds.meta(nav, "heading").unwrap().rate_hz, None);
+    let rates = [
+        (["speed", "heading", "lat", "lon", "x", "y", "alt", "alt_msl", "climb"].as_slice(), 2.0),
+        (&["roll", "pitch", "yaw"], 2.0),
+        (&["airspeed", "groundspeed", "throttle"], 2.0),
+        (&["gps_fix", "gps_fix_raw", "satellites", "hdop"], 1.0),
+    ];
+    for (props, hz) in rates {
+        for p in props {
+            assert_eq!(w.ds.meta(nav, *p).unwrap().rate_hz, Some(hz), "nav.{p}");
+        }
+    }
+    // Not telemetry: what the vehicle is and what we made of its link.
+    for p in ["name", "sysid", "link_lost", "stale", "verified", "control"] {
+        assert_eq!(w.ds.meta(v, p).unwrap().rate_hz, None, "{p}");
+    }
 }

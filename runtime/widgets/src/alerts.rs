@@ -8,6 +8,8 @@
 //! - A press on a row acknowledges that alert, on the count line every alert (the keyboard's
 //!   Escape and the gamepad's `select` do the same through the layout's bindings).
 //! - Rows that do not fit are summed up as "+N more".
+//! - It draws at the widget's `scale` (a layout's design scale; the runtime gives its
+//!   built-in layer the display's), never below 1: alert text stays at least 12 px.
 
 use mocu_dataserver::DataServer;
 use mocu_display::{Align, Baseline, Brush, Canvas, Color, Point, Rect, TextStyle};
@@ -52,8 +54,25 @@ pub struct Plan {
     pub critical: bool,
 }
 
-/// The alerts to show in a widget of size `b`, newest first.
-pub fn plan(ds: &DataServer, b: Rect) -> Plan {
+/// The scale the layer draws at, from the widget's `scale` property: at least 1.
+pub fn scale_of(scale: Option<f64>) -> f32 {
+    scale.filter(|s| s.is_finite()).map_or(1.0, |s| s.max(1.0)) as f32
+}
+
+/// The alerts to show in a widget of size `b` (screen px) drawn at scale `s`, newest first;
+/// the rectangles are widget-local screen px.
+pub fn plan(ds: &DataServer, b: Rect, s: f32) -> Plan {
+    let mut p = plan_unscaled(ds, Rect::new(0.0, 0.0, b.w / s, b.h / s));
+    let up = |r: Rect| Rect::new(r.x * s, r.y * s, r.w * s, r.h * s);
+    p.head = p.head.map(up);
+    for (_, r) in &mut p.rows {
+        *r = up(*r);
+    }
+    p
+}
+
+/// [`plan`] in the layer's own px (before its scale).
+fn plan_unscaled(ds: &DataServer, b: Rect) -> Plan {
     let mut plan = Plan::default();
     let Some(folder) = ds.resolve(&["operator", "alerts"]) else { return plan };
     let t = ds.wall_secs();
@@ -80,8 +99,8 @@ pub fn plan(ds: &DataServer, b: Rect) -> Plan {
     if plan.unacknowledged == 0 {
         return plan;
     }
-    // At most MAX_W, and no more than 60% of a wide screen: the rest stays in sight.
-    let w = MAX_W.min((b.w * 0.6).max(420.0)).min(b.w - 16.0).max(120.0);
+    // At most MAX_W, centred, 8 px in from each side.
+    let w = MAX_W.min(b.w - 16.0).max(120.0);
     let x = (b.w - w) / 2.0;
     plan.head = Some(Rect::new(x, 6.0, w, HEAD - 4.0));
     let mut y = 6.0 + HEAD;
@@ -100,9 +119,16 @@ pub fn plan(ds: &DataServer, b: Rect) -> Plan {
     plan
 }
 
-/// Draws the layer (widget-local coordinates).
-pub fn draw(c: &mut dyn Canvas, ds: &DataServer, b: Rect) {
-    let p = plan(ds, b);
+/// Draws the layer (widget-local coordinates, `b` in screen px) at scale `s`.
+pub fn draw(c: &mut dyn Canvas, ds: &DataServer, b: Rect, s: f32) {
+    c.save();
+    c.scale(s, s);
+    draw_unscaled(c, ds, Rect::new(0.0, 0.0, b.w / s, b.h / s));
+    c.restore();
+}
+
+fn draw_unscaled(c: &mut dyn Canvas, ds: &DataServer, b: Rect) {
+    let p = plan_unscaled(ds, b);
     let Some(head) = p.head else { return };
     let ink = if p.critical { ALARM } else { CAUTION };
     c.fill_rounded_rect(head, 4.0, &Brush::Solid(PANEL));
@@ -166,10 +192,10 @@ pub fn fit(text: &str, size: f32, room: f32) -> String {
     format!("{}…", chars.iter().collect::<String>().trim_end())
 }
 
-/// A press at widget-local `p`: a row acknowledges its alert, the count line all of them.
-/// Returns whether it hit something.
-pub fn press(ds: &DataServer, b: Rect, p: Point) -> bool {
-    let plan = plan(ds, b);
+/// A press at widget-local `p` on a layer drawn at scale `s`: a row acknowledges its alert,
+/// the count line all of them. Returns whether it hit something.
+pub fn press(ds: &DataServer, b: Rect, p: Point, s: f32) -> bool {
+    let plan = plan(ds, b, s);
     if let Some((s, _)) = plan.rows.iter().find(|(_, r)| r.contains(p)) {
         ds.call(s.object, "acknowledge", vec![], None, |_| {});
         return true;

@@ -7,6 +7,9 @@
 //! `select` event of the `Map` widget placed in the window (fig. 1: the small map swaps
 //! into the large place). A right press on a symbol opens the layout's context menu for
 //! the vehicle's type. `symbols()` answers `[name, x, y, …]` in window pixels.
+//!
+//! Symbols, labels and lines grow with the layout's design scale (`root.display.scale`,
+//! never below 1), like the widgets around the map.
 
 use mocu_dataserver::{
     CallOutcome, DataServer, DottedPath, Executor, Kind, MethodSpec, Notification, PathWatch,
@@ -251,12 +254,13 @@ impl Shared {
 
     /// The vehicle whose symbol is within reach of a window-local point.
     fn vehicle_at(&self, g: Guid, p: Point) -> Option<Guid> {
+        let reach = (16.0 * self.ui_scale()).powi(2);
         let st = self.state.lock();
         st.symbols
             .get(&g)?
             .iter()
             .map(|(v, _, s)| (*v, (s.x - p.x).powi(2) + (s.y - p.y).powi(2)))
-            .filter(|(_, d2)| *d2 <= 16.0 * 16.0)
+            .filter(|(_, d2)| *d2 <= reach)
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(v, _)| v)
     }
@@ -301,10 +305,11 @@ impl Shared {
 
     fn paint(&self, g: Guid, c: &mut dyn Canvas, _a: &PaintArgs) {
         let size = c.size();
+        let u = self.ui_scale();
         let bg = Color::rgba(0x0e, 0x17, 0x22, 0xf0);
         let grid = Color::rgba(0x38, 0xbd, 0xf8, 0x22);
         let frame = Color::rgb(0x3a, 0x4a, 0x5a);
-        c.fill_rounded_rect(Rect::new(0.0, 0.0, size.w, size.h), 6.0, &Brush::Solid(bg));
+        c.fill_rounded_rect(Rect::new(0.0, 0.0, size.w, size.h), 6.0 * u, &Brush::Solid(bg));
         // Vehicles and route points in local metres.
         let vehicles = self.vehicles();
         let mut pts: Vec<(f64, f64)> = vehicles.iter().map(|v| v.pos).collect();
@@ -325,7 +330,7 @@ impl Shared {
         }
         let span = ((x1 - x0).max(y1 - y0)).max(100.0) * 1.3;
         let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-        let scale = (size.w.min(size.h) as f64 - 20.0).max(10.0) / span;
+        let scale = (size.w.min(size.h) as f64 - 20.0 * u as f64).max(10.0) / span;
         let to_screen = |x: f64, y: f64| {
             Point::new(
                 (size.w as f64 / 2.0 + (x - cx) * scale) as f32,
@@ -339,17 +344,17 @@ impl Shared {
         while gx < cx + span {
             let a = to_screen(gx, cy - span);
             let b = to_screen(gx, cy + span);
-            c.line(Point::new(a.x, 0.0), Point::new(b.x, size.h), 1.0, grid);
+            c.line(Point::new(a.x, 0.0), Point::new(b.x, size.h), u, grid);
             let a = to_screen(cx - span, gx - gx0 + ((cy - span) / step).floor() * step);
-            c.line(Point::new(0.0, a.y), Point::new(size.w, a.y), 1.0, grid);
+            c.line(Point::new(0.0, a.y), Point::new(size.w, a.y), u, grid);
             gx += step;
         }
         let dim = Color::rgb(0x8f, 0xa3, 0xb5);
         let scale_text = format!("grid {} m", step);
         c.draw_text(
             &scale_text,
-            Point::new(8.0, size.h - 8.0),
-            &TextStyle::new(12.0, dim).baseline(Baseline::Bottom),
+            Point::new(8.0 * u, size.h - 8.0 * u),
+            &TextStyle::new(12.0 * u, dim).baseline(Baseline::Bottom),
         );
         for v in &vehicles {
             for route in &v.routes {
@@ -357,12 +362,12 @@ impl Shared {
                 if pts.len() >= 2 {
                     c.stroke_path(
                         &Path::polyline(&pts, false),
-                        &Stroke::new(1.5).dash(&[6.0, 4.0], 0.0),
+                        &Stroke::new(1.5 * u).dash(&[6.0 * u, 4.0 * u], 0.0),
                         &Brush::Solid(Color::rgb(0xf5, 0x9e, 0x0b)),
                     );
                 }
                 for p in pts {
-                    c.fill_circle(p, 3.5, Color::rgb(0xf5, 0x9e, 0x0b));
+                    c.fill_circle(p, 3.5 * u, Color::rgb(0xf5, 0x9e, 0x0b));
                 }
             }
         }
@@ -378,28 +383,38 @@ impl Shared {
             let p = to_screen(v.pos.0, v.pos.1);
             symbols.push((v.guid, v.name.clone(), p));
             if selected == Some(v.guid) {
-                c.stroke_circle(p, 16.0, 1.5, Color::rgb(0xfa, 0xcc, 0x15));
+                c.stroke_circle(p, 16.0 * u, 1.5 * u, Color::rgb(0xfa, 0xcc, 0x15));
             }
             let h = (v.heading as f32).to_radians();
             // Heading 0 = north (up), clockwise.
             let dir = |a: f32, r: f32| Point::new(p.x + (h + a).sin() * r, p.y - (h + a).cos() * r);
-            let tri = Path::polyline(&[dir(0.0, 12.0), dir(2.5, 8.0), dir(-2.5, 8.0)], true);
+            let tri =
+                Path::polyline(&[dir(0.0, 12.0 * u), dir(2.5, 8.0 * u), dir(-2.5, 8.0 * u)], true);
             let col =
                 if v.stale { Color::rgb(0x5b, 0x64, 0x70) } else { Color::rgb(0x38, 0xbd, 0xf8) };
             c.fill_path(&tri, &Brush::Solid(col));
-            c.stroke_path(&tri, &Stroke::new(1.0), &Brush::Solid(Color::rgb(0xe8, 0xf0, 0xf8)));
-            let style = TextStyle::new(12.0, Color::rgb(0xe8, 0xf0, 0xf8))
+            let white = Brush::Solid(Color::rgb(0xe8, 0xf0, 0xf8));
+            c.stroke_path(&tri, &Stroke::new(u), &white);
+            let style = TextStyle::new(12.0 * u, Color::rgb(0xe8, 0xf0, 0xf8))
                 .align(Align::Left)
                 .baseline(Baseline::Middle);
-            c.draw_text(&v.name, Point::new(p.x + 14.0, p.y), &style);
+            c.draw_text(&v.name, Point::new(p.x + 14.0 * u, p.y), &style);
         }
         self.state.lock().symbols.insert(g, symbols);
         c.stroke_rounded_rect(
             Rect::new(0.5, 0.5, size.w - 1.0, size.h - 1.0),
-            6.0,
+            6.0 * u,
             &Stroke::new(1.0),
             frame,
         );
+    }
+
+    /// The scale symbols, labels and lines draw at: the layout's design scale
+    /// (`root.display.scale`, docs/language.md "Screen sizes"), never below 1.
+    fn ui_scale(&self) -> f32 {
+        let display = self.ds.resolve(&["display"]);
+        let s = display.and_then(|d| self.ds.try_get(d, PropName::new("scale")));
+        s.and_then(|v| v.as_f64()).filter(|s| s.is_finite()).map_or(1.0, |s| s.max(1.0)) as f32
     }
 
     fn vehicles(&self) -> Vec<MapVehicle> {

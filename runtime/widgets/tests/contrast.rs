@@ -335,7 +335,7 @@ fn draw_alert_layer() -> Vec<Run> {
     ds.quiesce();
     let mut probe = Probe::new();
     probe.widget = "alert layer".into();
-    mocu_widgets::alerts::draw(&mut probe, &ds, Rect::new(0.0, 0.0, 900.0, 300.0));
+    mocu_widgets::alerts::draw(&mut probe, &ds, Rect::new(0.0, 0.0, 900.0, 300.0), 1.0);
     probe.runs
 }
 

@@ -438,8 +438,10 @@ fn pressing_an_alert_row_acknowledges_it_and_the_count_line_acknowledges_all() {
     let layer = rig.ds.resolve(&["display", "alert_layer"]).expect("the built-in alert layer");
     let ds = rig.ds.clone();
     let n = |k: &str| ds.get(layer, k).unwrap().as_f64().unwrap() as f32;
+    let widget = rig.ds.resolve(&["display", "alert_layer", "alerts"]).unwrap();
+    let s = mocu_widgets::alerts::scale_of(rig.ds.get(widget, "scale").unwrap().as_f64());
     let plan =
-        mocu_widgets::alerts::plan(&rig.ds, mocu_display::Rect::new(0.0, 0.0, n("w"), n("h")));
+        mocu_widgets::alerts::plan(&rig.ds, mocu_display::Rect::new(0.0, 0.0, n("w"), n("h")), s);
     assert_eq!(plan.unacknowledged, 2);
     let (first, r) = plan.rows[0].clone();
     assert_eq!(first.severity, "warning");

@@ -22,7 +22,8 @@ pub fn draw_native(
         return;
     }
     if component == crate::alerts::COMPONENT {
-        crate::alerts::draw(c, ds, Rect::new(0.0, 0.0, b.w, b.h));
+        let s = crate::alerts::scale_of(props.get("scale").and_then(Value::as_f64));
+        crate::alerts::draw(c, ds, Rect::new(0.0, 0.0, b.w, b.h), s);
         return;
     }
     c.fill_rounded_rect(Rect::new(0.0, 0.0, b.w, b.h), 4.0, &Brush::Solid(theme::PANEL));

@@ -196,5 +196,17 @@ fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32) {
         .align(Align::Center)
         .baseline(Baseline::Middle)
         .bold();
+    if tw + 8.0 > area.w && tw + 8.0 <= area.h {
+        // A tall, narrow widget (a vertical bar): the tag runs up its middle, inside it.
+        let mid = Point::new(area.x + area.w / 2.0, area.y + area.h / 2.0);
+        c.save();
+        c.translate(mid.x, mid.y);
+        c.rotate(-std::f32::consts::FRAC_PI_2);
+        let back = Rect::new(-tw / 2.0 - 4.0, -size * 0.75, tw + 8.0, size * 1.5);
+        c.fill_rounded_rect(back, 3.0, &Brush::Solid(Color::rgba(0, 0, 0, 200)));
+        c.draw_text("STALE", Point::new(0.0, 0.0), &style);
+        c.restore();
+        return;
+    }
     c.draw_text("STALE", mid, &style);
 }

@@ -152,7 +152,9 @@ impl Shared {
         layers.into_iter().filter(|(win, _)| *win == window).any(|(_, w)| {
             widget_bounds(&self.ds, w).is_some_and(|b| {
                 let local = Point::new(p.x - b.x, p.y - b.y);
-                crate::alerts::press(&self.ds, Rect::new(0.0, 0.0, b.w, b.h), local)
+                let scale = self.ds.try_get(w, PropName::new("scale")).and_then(|v| v.as_f64());
+                let s = crate::alerts::scale_of(scale);
+                crate::alerts::press(&self.ds, Rect::new(0.0, 0.0, b.w, b.h), local, s)
             })
         })
     }
