@@ -10,6 +10,7 @@ mod build;
 mod check;
 mod frames;
 mod logger;
+mod lsp;
 mod run;
 mod stop;
 
@@ -28,6 +29,8 @@ enum Command {
     Build(build::BuildArgs),
     /// Run the OCU on a layout, a profile or a bundle.
     Run(run::RunArgs),
+    /// Serve the Language Server Protocol on stdin/stdout, for editors.
+    Lsp(lsp::LspArgs),
 }
 
 fn main() -> ExitCode {
@@ -44,5 +47,6 @@ fn main() -> ExitCode {
         Command::Check(args) => check::main(args),
         Command::Build(args) => build::main(args),
         Command::Run(args) => run::main(args),
+        Command::Lsp(args) => lsp::main(args),
     }
 }

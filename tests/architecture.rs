@@ -61,10 +61,13 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "mocu-display",
         ],
     ),
+    // The language server: the checker's API over the editor's documents; nothing of the runtime.
+    ("mocu-lsp", &["mocu-language"]),
     // The command line puts everything together.
     (
         "mocu",
         &[
+            "mocu-lsp",
             "mocu-value",
             "mocu-dataserver",
             "mocu-language",
