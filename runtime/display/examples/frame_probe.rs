@@ -1,6 +1,7 @@
 //! Where a benchmark frame's time goes: times each part of `benches/frame.rs`'s scene on
 //! the CPU canvas (median of N runs). `cargo run --release -p mocu-display --example
-//! frame_probe`.
+//! frame_probe`. `-- scene N` only draws the benchmark's full frame N times (for
+//! `valgrind --tool=callgrind`, whose counts do not depend on the machine's load).
 
 use mocu_display::demo;
 use mocu_display::*;
@@ -35,6 +36,11 @@ fn canvas() -> SkiaCanvas {
 
 fn main() {
     let n = 15;
+    let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("scene") {
+        scene_frames(args.get(2).and_then(|a| a.parse().ok()).unwrap_or(5));
+        return;
+    }
     scene_frames(31);
     composite_only(15);
     let values: Vec<f32> = (0..20).map(|i| i as f32 * 4.0).collect();

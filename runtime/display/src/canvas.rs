@@ -192,6 +192,23 @@ pub trait Canvas {
         crate::text::measure(text, style.size, style.bold)
     }
 
+    /// Draws the picture `key` of `bounds` (current coordinates) this canvas cached, if it
+    /// holds one for the current scale and sub-pixel position: true when drawn. See
+    /// [`picture`].
+    fn draw_picture(&mut self, _key: u64, _bounds: Rect) -> bool {
+        false
+    }
+
+    /// Starts recording the picture `key` of `bounds`: drawings until
+    /// [`Canvas::end_picture`] make the picture. False when this canvas does not cache
+    /// pictures (they are then drawn directly).
+    fn begin_picture(&mut self, _key: u64, _bounds: Rect) -> bool {
+        false
+    }
+
+    /// Ends the recording [`Canvas::begin_picture`] began: keeps the picture and draws it.
+    fn end_picture(&mut self) {}
+
     // ----- conveniences (provided) -----------------------------------------------
 
     fn translate(&mut self, dx: f32, dy: f32) {
@@ -244,6 +261,31 @@ pub trait Canvas {
     ) {
         self.stroke_path(&Path::arc(c, radius, start, sweep), stroke, &Brush::Solid(color));
     }
+}
+
+/// Draws what `draw` draws through a picture cached by the canvas (a dial's face, ticks
+/// and track): the first time it is drawn into a sprite kept under `key`, then the sprite
+/// is blitted — a copy where nothing was drawn yet — instead of drawing again.
+///
+/// `key` names everything the drawing depends on *relative to `bounds`*: the same key with
+/// `bounds` moved must draw the same thing moved (the cache adds the bounds' size, the
+/// scale and the sub-pixel position). Nothing may be drawn outside `bounds`. Canvases that
+/// do not cache, and transforms other than translate + uniform scale, draw directly.
+pub fn picture(c: &mut dyn Canvas, key: u64, bounds: Rect, draw: impl FnOnce(&mut dyn Canvas)) {
+    if c.draw_picture(key, bounds) {
+        return;
+    }
+    let recording = c.begin_picture(key, bounds);
+    draw(c);
+    if recording {
+        c.end_picture();
+    }
+}
+
+/// A picture key from anything hashable (a tag and the parameters the drawing depends on).
+pub fn picture_key(what: impl std::hash::Hash) -> u64 {
+    use std::hash::{BuildHasher, BuildHasherDefault};
+    BuildHasherDefault::<std::collections::hash_map::DefaultHasher>::default().hash_one(what)
 }
 
 /// The destination rectangle of an image of `img` pixels drawn into `dst` with `fit`.

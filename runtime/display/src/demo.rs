@@ -2,7 +2,7 @@
 //! tests, the benchmark and the window demo draw; real content comes from the widget
 //! renderer, the video module and the map module, which paint the same way.
 
-use crate::canvas::{Align, Baseline, Brush, Canvas, LineCap, Stroke, TextStyle};
+use crate::canvas::{self, Align, Baseline, Brush, Canvas, LineCap, Stroke, TextStyle};
 use crate::color::Color;
 use crate::geom::{Point, Rect};
 use crate::path::{Path, PathBuilder};
@@ -47,10 +47,31 @@ pub fn gauge(
     } else {
         EDGE
     };
-    c.fill_circle(center, radius, PANEL);
-    c.stroke_circle(center, radius - 1.0, 1.5, EDGE.with_alpha(0.35));
+    // The face (panel, rim, track and ticks) is the same frame after frame: a cached
+    // picture, drawn once.
     let r_arc = radius * 0.8;
-    c.stroke_arc(center, r_arc, start, sweep, &Stroke::new(radius * 0.09), DIM.with_alpha(0.5));
+    let face = Rect::new(
+        center.x - radius - 2.0,
+        center.y - radius - 2.0,
+        2.0 * radius + 4.0,
+        2.0 * radius + 4.0,
+    );
+    canvas::picture(c, canvas::picture_key(("demo::gauge face", radius.to_bits())), face, |c| {
+        c.fill_circle(center, radius, PANEL);
+        c.stroke_circle(center, radius - 1.0, 1.5, EDGE.with_alpha(0.35));
+        c.stroke_arc(center, r_arc, start, sweep, &Stroke::new(radius * 0.09), DIM.with_alpha(0.5));
+        let mut ticks = PathBuilder::new();
+        for i in 0..=20 {
+            let a = start + sweep * i as f32 / 20.0;
+            let (s, co) = a.sin_cos();
+            let r0 = if i % 5 == 0 { radius * 0.6 } else { radius * 0.66 };
+            ticks.move_to(Point::new(center.x + co * r0, center.y + s * r0));
+            ticks.line_to(Point::new(center.x + co * radius * 0.71, center.y + s * radius * 0.71));
+        }
+        c.stroke_path(&ticks.finish(), &Stroke::new(1.5), &Brush::Solid(TEXT.with_alpha(0.8)));
+    });
+    // The value's arc lies outside the ticks (0.755 to 0.845 of the radius; the ticks end
+    // at 0.71): drawing it after them changes no pixel.
     c.stroke_arc(
         center,
         r_arc,
@@ -59,15 +80,6 @@ pub fn gauge(
         &Stroke::new(radius * 0.09).cap(LineCap::Round),
         color,
     );
-    let mut ticks = PathBuilder::new();
-    for i in 0..=20 {
-        let a = start + sweep * i as f32 / 20.0;
-        let (s, co) = a.sin_cos();
-        let r0 = if i % 5 == 0 { radius * 0.6 } else { radius * 0.66 };
-        ticks.move_to(Point::new(center.x + co * r0, center.y + s * r0));
-        ticks.line_to(Point::new(center.x + co * radius * 0.71, center.y + s * radius * 0.71));
-    }
-    c.stroke_path(&ticks.finish(), &Stroke::new(1.5), &Brush::Solid(TEXT.with_alpha(0.8)));
     // The needle, drawn pointing right and rotated into place.
     c.save();
     c.translate(center.x, center.y);

@@ -37,7 +37,7 @@ mod wm;
 pub use anim::{Animator, Clock, Easing};
 pub use canvas::{
     Align, Baseline, Brush, Canvas, ImageFit, LineCap, LineJoin, Stroke, TextMetrics, TextStyle,
-    fit_rect,
+    fit_rect, picture, picture_key,
 };
 pub use color::Color;
 pub use compose::{CpuCompositor, LayerView};

@@ -12,7 +12,9 @@ use crate::text;
 use crate::tiles::Tiles;
 
 mod analytic;
+mod lazy;
 mod masks;
+mod pictures;
 mod resample;
 use tiny_skia::{FillRule, Mask, Paint, Pixmap};
 
@@ -37,16 +39,18 @@ pub struct SkiaCanvas {
     state: State,
     stack: Vec<State>,
     mask: Option<(IRect, Mask)>,
-    /// The pixmap still holds a previous frame, to be cleared before anything draws on it
-    /// unless the first drawing covers every pixel with opaque paint (a chart's or a
-    /// camera's background): one memset of the layer saved. Only the drawn-on tiles are
-    /// cleared.
-    stale: bool,
-    /// The tiles drawn on (before a stale pixmap is cleared: in its previous frame).
+    /// What is owed to the pixmap before a drawing lands on it: the previous frame's tiles
+    /// to clear, an opaque background's rows to fill (`lazy.rs`). Nothing is cleared
+    /// where an opaque drawing covering the whole pixmap comes first (a chart's or a
+    /// camera's background).
+    pending: lazy::Pending,
+    /// The tiles drawn on since the canvas began.
     tiles: Tiles,
     /// Every pixel is opaque: an opaque drawing covered the whole pixmap (source-over
     /// keeps it so).
     opaque: bool,
+    /// A picture being recorded (this canvas then draws into its sprite).
+    recording: Option<Box<pictures::Recording>>,
 }
 
 impl SkiaCanvas {
@@ -70,12 +74,12 @@ impl SkiaCanvas {
         origin: (i32, i32),
         size: Size,
     ) -> SkiaCanvas {
-        let tiles = if tiles.size() == (pixmap.width(), pixmap.height()) {
-            tiles
-        } else {
-            Tiles::all(pixmap.width(), pixmap.height())
-        };
-        SkiaCanvas { stale: true, ..SkiaCanvas::with_tiles(pixmap, tiles, origin, size) }
+        let (w, h) = (pixmap.width(), pixmap.height());
+        let stale = if tiles.size() == (w, h) { tiles } else { Tiles::all(w, h) };
+        SkiaCanvas {
+            pending: lazy::Pending::stale(stale),
+            ..SkiaCanvas::with_tiles(pixmap, Tiles::none(w, h), origin, size)
+        }
     }
 
     fn with_tiles(pixmap: Pixmap, tiles: Tiles, origin: (i32, i32), size: Size) -> SkiaCanvas {
@@ -89,9 +93,10 @@ impl SkiaCanvas {
             state: State { transform: Transform::IDENTITY, clip: full },
             stack: Vec::new(),
             mask: None,
-            stale: false,
+            pending: lazy::Pending::none(),
             tiles,
             opaque: false,
+            recording: None,
         }
     }
 
@@ -99,7 +104,8 @@ impl SkiaCanvas {
     /// over a transparent pixmap: the clearing happens before the first drawing, or not
     /// at all when that drawing paints every pixel opaque.
     pub fn reusing(pixmap: Pixmap, origin: (i32, i32), size: Size) -> SkiaCanvas {
-        SkiaCanvas { stale: true, ..SkiaCanvas::new(pixmap, origin, size) }
+        let tiles = Tiles::all(pixmap.width(), pixmap.height());
+        SkiaCanvas::reusing_drawn(pixmap, tiles, origin, size)
     }
 
     /// Gives the pixmap back.
@@ -109,33 +115,13 @@ impl SkiaCanvas {
 
     /// Gives the pixmap back with its drawn-on tiles and whether it is wholly opaque.
     pub(crate) fn into_parts(mut self) -> (Pixmap, Tiles, bool) {
-        self.ready();
+        self.finish();
         (self.pixmap, self.tiles, self.opaque)
     }
 
     pub fn pixmap(&mut self) -> &Pixmap {
-        self.ready();
+        self.finish();
         &self.pixmap
-    }
-
-    /// Clears a reused pixmap before the first drawing that needs it cleared.
-    fn ready(&mut self) {
-        if !std::mem::take(&mut self.stale) {
-            return;
-        }
-        self.opaque = false;
-        if self.tiles.is_all() {
-            self.pixmap.data_mut().fill(0);
-        } else {
-            let w = self.pixmap.width() as usize;
-            let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
-            for r in self.tiles.rects() {
-                for y in r.y..r.bottom() {
-                    px[y as usize * w + r.x as usize..][..r.w as usize].fill([0; 4]);
-                }
-            }
-        }
-        self.tiles.reset();
     }
 
     /// Records that pixels inside `r` (pixmap pixels) are drawn on.
@@ -174,7 +160,7 @@ impl SkiaCanvas {
         if clip.is_empty() {
             return;
         }
-        self.ready();
+        self.prepare(bounds.intersect(&clip));
         self.touch(bounds);
         if clip == self.full() {
             return f(&mut self.pixmap, None);
@@ -238,16 +224,6 @@ impl SkiaCanvas {
         let len2 = vx * vx + vy * vy;
         let lut = gradient_lut(stops);
         let opaque = lut.iter().all(|c| c[3] == 255);
-        if opaque && area == self.full() {
-            self.stale = false; // every pixel is overwritten
-            self.opaque = true;
-            self.tiles.mark_all();
-        } else {
-            self.ready();
-            self.touch(area);
-        }
-        let w = self.pixmap.width() as usize;
-        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         let t_at = |x: f32, y: f32| -> usize {
             if len2 <= f32::EPSILON {
                 return 255;
@@ -255,6 +231,22 @@ impl SkiaCanvas {
             let t = ((x - p0.x) * vx + (y - p0.y) * vy) / len2;
             (t.clamp(0.0, 1.0) * 255.0 + 0.5) as usize
         };
+        if opaque && area == self.full() {
+            if vx == 0.0 {
+                // One colour a row: filled when a drawing first needs the row.
+                let rows = (0..area.h).map(|y| lut[t_at(0.0, y as f32 + 0.5)]).collect();
+                self.set_background(rows);
+                return true;
+            }
+            self.pending = lazy::Pending::none(); // every pixel is overwritten
+            self.opaque = true;
+            self.tiles.mark_all();
+        } else {
+            self.prepare(area);
+            self.touch(area);
+        }
+        let w = self.pixmap.width() as usize;
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         // t along the row in 16.16 fixed point, stepping by a constant.
         let step = if len2 > f32::EPSILON { (vx / len2 * 255.0 * 65536.0) as i64 } else { 0 };
         for y in area.y..area.bottom() {
@@ -300,7 +292,7 @@ impl SkiaCanvas {
         if area.is_empty() {
             return true;
         }
-        self.ready();
+        self.prepare(area);
         self.touch(area);
         let (iw, ih) = (image.width(), image.height());
         let ax = resample::Axis {
@@ -336,10 +328,8 @@ impl SkiaCanvas {
         if clip.is_empty() {
             return;
         }
-        self.ready();
         let pw = self.pixmap.width() as usize;
         let pre = pixel::premultiply(color);
-        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         if let Some(m) = text::with_engine(|e| e.mask(run)) {
             let (mx0, my0) = (ox.saturating_add(m.left), oy.saturating_add(m.top));
             let (mw, mh) =
@@ -348,7 +338,9 @@ impl SkiaCanvas {
             if r.is_empty() || m.data.len() < m.width * m.height {
                 return;
             }
+            self.prepare(r);
             self.tiles.mark(r);
+            let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
             let (cx, w) = ((r.x - mx0) as usize, r.w as usize);
             for y in r.y..r.bottom() {
                 let mrow = &m.data[(y - my0) as usize * m.width + cx..][..w];
@@ -357,6 +349,9 @@ impl SkiaCanvas {
             }
             return;
         }
+        // Colour glyphs (rare): the whole clip made ready.
+        self.prepare(clip);
+        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         let tiles = &mut self.tiles;
         text::with_engine(|e| {
             for g in &run.glyphs {
@@ -488,6 +483,18 @@ impl Canvas for SkiaCanvas {
         self.size
     }
 
+    fn draw_picture(&mut self, key: u64, bounds: Rect) -> bool {
+        self.draw_cached_picture(key, bounds)
+    }
+
+    fn begin_picture(&mut self, key: u64, bounds: Rect) -> bool {
+        self.begin_recording(key, bounds)
+    }
+
+    fn end_picture(&mut self) {
+        self.end_recording()
+    }
+
     fn damage(&self) -> Rect {
         self.damage
     }
@@ -526,15 +533,20 @@ impl Canvas for SkiaCanvas {
         if clip.is_empty() {
             return;
         }
+        let px = pixel::premultiply(color);
         if clip == self.full() {
-            self.stale = false; // every pixel is overwritten
-            self.opaque = color.a == 255;
+            if color.a == 255 {
+                // Filled row by row when drawings first need the rows.
+                self.set_background(vec![px; clip.h as usize]);
+                return;
+            }
+            self.pending = lazy::Pending::none(); // every pixel is overwritten
+            self.opaque = false;
         } else {
-            self.ready();
+            self.prepare(clip);
             self.opaque &= color.a == 255;
         }
         self.touch(clip);
-        let px = pixel::premultiply(color);
         let w = self.pixmap.width() as usize;
         let (data, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         for y in clip.y..clip.bottom() {

@@ -22,10 +22,8 @@ pub struct Tiles {
     cols: usize,
     /// One flag a tile, row-major.
     marked: Vec<bool>,
-    /// Some tile is marked.
-    any: bool,
-    /// Every tile is marked.
-    all: bool,
+    /// How many tiles are marked.
+    count: usize,
 }
 
 impl Tiles {
@@ -39,8 +37,7 @@ impl Tiles {
             height: h,
             cols: cols as usize,
             marked: vec![false; cols as usize * rows as usize],
-            any: false,
-            all: cols * rows == 0,
+            count: 0,
         }
     }
 
@@ -60,46 +57,59 @@ impl Tiles {
     }
 
     pub fn is_empty(&self) -> bool {
-        !self.any
+        self.count == 0
     }
 
     pub fn is_all(&self) -> bool {
-        self.all
+        self.count == self.marked.len()
     }
 
     pub fn mark_all(&mut self) {
         self.marked.fill(true);
-        self.any = !self.marked.is_empty();
-        self.all = true;
+        self.count = self.marked.len();
     }
 
     /// Unmarks every tile (the pixmap was cleared).
     pub fn reset(&mut self) {
         self.marked.fill(false);
-        self.any = false;
-        self.all = self.marked.is_empty();
+        self.count = 0;
     }
 
     /// Marks the tiles `r` (pixmap pixels) touches.
     pub fn mark(&mut self, r: IRect) {
         let r = r.intersect(&self.bounds());
-        if r.is_empty() || self.all {
+        if r.is_empty() || self.is_all() {
             return;
         }
         let (c0, c1) = ((r.x / TILE_W) as usize, ((r.right() - 1) / TILE_W) as usize);
         for ty in r.y / TILE_H..=(r.bottom() - 1) / TILE_H {
-            self.marked[ty as usize * self.cols..][c0..=c1].fill(true);
+            let row = &mut self.marked[ty as usize * self.cols..][c0..=c1];
+            self.count += row.iter().filter(|m| !**m).count();
+            row.fill(true);
         }
-        self.any = true;
+    }
+
+    /// Unmarks the tiles `r` (pixmap pixels) touches (their pixels were cleared).
+    pub fn unmark(&mut self, r: IRect) {
+        let r = r.intersect(&self.bounds());
+        if r.is_empty() || self.is_empty() {
+            return;
+        }
+        let (c0, c1) = ((r.x / TILE_W) as usize, ((r.right() - 1) / TILE_W) as usize);
+        for ty in r.y / TILE_H..=(r.bottom() - 1) / TILE_H {
+            let row = &mut self.marked[ty as usize * self.cols..][c0..=c1];
+            self.count -= row.iter().filter(|m| **m).count();
+            row.fill(false);
+        }
     }
 
     /// Whether any tile `r` touches is marked.
     pub fn touches(&self, r: IRect) -> bool {
         let r = r.intersect(&self.bounds());
-        if r.is_empty() || !self.any {
+        if r.is_empty() || self.is_empty() {
             return false;
         }
-        if self.all {
+        if self.is_all() {
             return true;
         }
         let (c0, c1) = ((r.x / TILE_W) as usize, ((r.right() - 1) / TILE_W) as usize);
@@ -111,10 +121,10 @@ impl Tiles {
     /// `(start, end)` of whole marked tiles clipped to `x0..x1`, left to right.
     pub fn row_runs(&self, y: i32, x0: i32, x1: i32, mut f: impl FnMut(i32, i32)) {
         let (x0, x1) = (x0.max(0), x1.min(self.width));
-        if y < 0 || y >= self.height || x0 >= x1 || !self.any {
+        if y < 0 || y >= self.height || x0 >= x1 || self.is_empty() {
             return;
         }
-        if self.all {
+        if self.is_all() {
             return f(x0, x1);
         }
         let row = &self.marked[(y / TILE_H) as usize * self.cols..][..self.cols];
@@ -136,10 +146,10 @@ impl Tiles {
     /// The marked tiles as rectangles, one a run of marked tiles in a tile row.
     pub fn rects(&self) -> Vec<IRect> {
         let mut out = Vec::new();
-        if !self.any {
+        if self.is_empty() {
             return out;
         }
-        if self.all {
+        if self.is_all() {
             out.push(self.bounds());
             return out;
         }
@@ -183,6 +193,16 @@ mod tests {
         runs.clear();
         t.row_runs(8, 0, 100, |a, b| runs.push((a, b)));
         assert!(runs.is_empty(), "the second tile row is clean: {runs:?}");
+    }
+
+    #[test]
+    fn unmarking_forgets_the_tiles_touched_and_keeps_the_others() {
+        let mut t = Tiles::all(100, 40);
+        t.unmark(IRect::new(40, 9, 1, 1));
+        assert!(!t.is_all() && !t.touches(IRect::new(32, 8, 32, 8)));
+        assert!(t.touches(IRect::new(0, 8, 32, 8)) && t.touches(IRect::new(32, 0, 32, 8)));
+        t.unmark(IRect::new(0, 0, 100, 40));
+        assert!(t.is_empty());
     }
 
     #[test]

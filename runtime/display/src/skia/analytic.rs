@@ -9,6 +9,7 @@ use crate::color::Color;
 use crate::geom::{IRect, Point, Rect};
 use crate::path::Path;
 use crate::pixel;
+use crate::tiles::TILE_H;
 
 impl SkiaCanvas {
     /// Circles and rings under a translate + uniform scale, with analytic coverage:
@@ -236,9 +237,7 @@ impl SkiaCanvas {
         let hw = stroke.width * s / 2.0;
         let pre = pixel::premultiply(color);
         let clip = self.state.clip;
-        self.ready();
         let w = self.pixmap.width() as usize;
-        let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         // Caps extend the segment: square by hw, round (as capsules) by hw.
         let ext = match stroke.cap {
             LineCap::Butt => 0.0,
@@ -298,78 +297,88 @@ impl SkiaCanvas {
         let Some(top) = prepared.iter().map(|g| g.bbox.y).min() else { return Some(()) };
         let bottom = prepared.iter().map(|g| g.bbox.bottom()).max().unwrap_or(top);
         // Row by row over all the segments: a grid's vertical lines touch each row of the
-        // pixmap once, in memory order, instead of a new page per pixel.
-        for y in top..bottom {
-            let row = &mut px[y as usize * w..][..w];
-            for g in &prepared {
-                if y < g.bbox.y || y >= g.bbox.bottom() {
-                    continue;
-                }
-                let (a, ux, uy, len) = (g.a, g.ux, g.uy, g.len);
-                let py = y as f32 + 0.5 - a.y;
-                if let Some(fx) = &g.fx {
-                    let fy = if uy == 0.0 { kp((py * ux).abs()) } else { ka(py * uy, len) };
-                    if fy <= 0.0 {
+        // pixmap once, in memory order, instead of a new page per pixel; a band of rows
+        // made ready (cleared, its background filled) just before it is drawn on.
+        let left = prepared.iter().map(|g| g.bbox.x).min().unwrap_or(0);
+        let right = prepared.iter().map(|g| g.bbox.right()).max().unwrap_or(left);
+        let mut band = top;
+        while band < bottom {
+            let end = ((band / TILE_H + 1) * TILE_H).min(bottom);
+            self.prepare(IRect::new(left, band, right - left, end - band));
+            let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
+            for y in band..end {
+                let row = &mut px[y as usize * w..][..w];
+                for g in &prepared {
+                    if y < g.bbox.y || y >= g.bbox.bottom() {
                         continue;
                     }
-                    let row = &mut row[g.bbox.x as usize..][..fx.len()];
-                    if fy == 1.0
-                        && let Some((first, sk)) = &g.sk
-                    {
-                        // Wholly crossed, narrow: `over` of each column's colour under
-                        // its coverage is `over_coverage` of the colour.
-                        row[*first..].iter_mut().zip(sk).for_each(|(d, s)| pixel::over(d, *s));
-                        continue;
-                    }
-                    if fy == 1.0
-                        && let Some(kx) = &g.kx
-                    {
-                        // Wholly crossed: each column's coverage as it is.
-                        pixel::cover_row(row, pre, kx);
-                        continue;
-                    }
-                    let run = pixel::scale(pre, (fy * 255.0 + 0.5) as u8);
-                    let mut i = 0;
-                    while i < fx.len() {
-                        if fx[i] == 1.0 {
-                            let e = i + fx[i..].iter().take_while(|k| **k == 1.0).count();
-                            pixel::blend_span(&mut row[i..e], run);
-                            i = e;
+                    let (a, ux, uy, len) = (g.a, g.ux, g.uy, g.len);
+                    let py = y as f32 + 0.5 - a.y;
+                    if let Some(fx) = &g.fx {
+                        let fy = if uy == 0.0 { kp((py * ux).abs()) } else { ka(py * uy, len) };
+                        if fy <= 0.0 {
                             continue;
                         }
-                        let k = fx[i] * fy;
-                        if k > 0.0 {
-                            SkiaCanvas::cover(row, i, pre, k);
+                        let row = &mut row[g.bbox.x as usize..][..fx.len()];
+                        if fy == 1.0
+                            && let Some((first, sk)) = &g.sk
+                        {
+                            // Wholly crossed, narrow: `over` of each column's colour under
+                            // its coverage is `over_coverage` of the colour.
+                            row[*first..].iter_mut().zip(sk).for_each(|(d, s)| pixel::over(d, *s));
+                            continue;
                         }
-                        i += 1;
+                        if fy == 1.0
+                            && let Some(kx) = &g.kx
+                        {
+                            // Wholly crossed: each column's coverage as it is.
+                            pixel::cover_row(row, pre, kx);
+                            continue;
+                        }
+                        let run = pixel::scale(pre, (fy * 255.0 + 0.5) as u8);
+                        let mut i = 0;
+                        while i < fx.len() {
+                            if fx[i] == 1.0 {
+                                let e = i + fx[i..].iter().take_while(|k| **k == 1.0).count();
+                                pixel::blend_span(&mut row[i..e], run);
+                                i = e;
+                                continue;
+                            }
+                            let k = fx[i] * fy;
+                            if k > 0.0 {
+                                SkiaCanvas::cover(row, i, pre, k);
+                            }
+                            i += 1;
+                        }
+                        continue;
                     }
-                    continue;
-                }
-                // The columns near the line on this row.
-                let (xa, xb) = if uy.abs() > 1e-3 {
-                    let xc = a.x + py * ux / uy;
-                    let span = (pad + ext) / uy.abs();
-                    ((xc - span).floor() as i32, (xc + span).ceil() as i32)
-                } else {
-                    (g.bbox.x, g.bbox.right())
-                };
-                for x in xa.max(g.bbox.x)..xb.min(g.bbox.right()) {
-                    let pxv = x as f32 + 0.5 - a.x;
-                    let along = pxv * ux + py * uy;
-                    let across = (pxv * uy - py * ux).abs();
-                    let k = match stroke.cap {
-                        LineCap::Round => {
-                            let t = along.clamp(0.0, len);
-                            let d = ((pxv - ux * t).powi(2) + (py - uy * t).powi(2)).sqrt();
-                            (hw + 0.5 - d).clamp(0.0, thin)
-                        }
-                        _ => ka(along, len) * kp(across),
+                    // The columns near the line on this row.
+                    let (xa, xb) = if uy.abs() > 1e-3 {
+                        let xc = a.x + py * ux / uy;
+                        let span = (pad + ext) / uy.abs();
+                        ((xc - span).floor() as i32, (xc + span).ceil() as i32)
+                    } else {
+                        (g.bbox.x, g.bbox.right())
                     };
-                    if k > 0.0 {
-                        SkiaCanvas::cover(row, x as usize, pre, k);
+                    for x in xa.max(g.bbox.x)..xb.min(g.bbox.right()) {
+                        let pxv = x as f32 + 0.5 - a.x;
+                        let along = pxv * ux + py * uy;
+                        let across = (pxv * uy - py * ux).abs();
+                        let k = match stroke.cap {
+                            LineCap::Round => {
+                                let t = along.clamp(0.0, len);
+                                let d = ((pxv - ux * t).powi(2) + (py - uy * t).powi(2)).sqrt();
+                                (hw + 0.5 - d).clamp(0.0, thin)
+                            }
+                            _ => ka(along, len) * kp(across),
+                        };
+                        if k > 0.0 {
+                            SkiaCanvas::cover(row, x as usize, pre, k);
+                        }
                     }
                 }
             }
+            band = end;
         }
         Some(())
     }

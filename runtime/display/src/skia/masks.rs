@@ -83,7 +83,7 @@ impl SkiaCanvas {
             return;
         }
         let pre = pixel::premultiply(color);
-        self.ready();
+        self.prepare(area);
         let w = self.pixmap.width() as usize;
         let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
         let Some(key) = key.filter(|_| bbox.area() <= MASK_MAX) else {
