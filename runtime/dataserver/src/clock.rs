@@ -106,6 +106,15 @@ impl ManualClock {
     }
 }
 
+impl ManualClock {
+    /// Sets the clock to `t` (never backwards) without firing anything: for
+    /// [`crate::DataServer::advance_settled`], which fires what falls due itself.
+    pub(crate) fn move_to(&self, t: Instant) {
+        let mut now = self.inner.now.lock();
+        *now = (*now).max(t);
+    }
+}
+
 impl Clock for ManualClock {
     fn now(&self) -> Instant {
         *self.inner.now.lock()

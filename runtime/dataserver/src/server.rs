@@ -496,17 +496,20 @@ impl DataServer {
     /// to quiet before the next fires. A run driven this way ends in the same state every
     /// time its inputs are the same (deterministic runs and replay, `docs/dataserver.md`).
     pub fn advance_settled(&self, clock: &crate::ManualClock, to: std::time::Instant) {
+        let timer = &self.inner.timer;
+        timer.hold(true);
         loop {
             self.quiesce();
-            match self.inner.timer.next_due() {
+            match timer.next_due() {
                 Some(due) if due <= to => {
                     clock.move_to(due);
-                    self.inner.timer.fire_one();
+                    timer.fire_one();
                 }
                 _ => break,
             }
         }
         clock.move_to(to);
+        timer.hold(false);
         self.quiesce();
     }
 

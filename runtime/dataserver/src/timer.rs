@@ -54,6 +54,9 @@ struct TimerShared {
     clock: Arc<dyn Clock>,
     stats: Arc<Stats>,
     manual: std::sync::atomic::AtomicBool,
+    /// While set (a manual clock stepped by `DataServer::advance_settled`), only the
+    /// stepping thread fires jobs, one at a time.
+    held: std::sync::atomic::AtomicBool,
 }
 
 #[derive(Default)]
@@ -72,6 +75,7 @@ impl Timer {
             clock: clock.clone(),
             stats,
             manual: false.into(),
+            held: false.into(),
         });
         let weak = Arc::downgrade(&shared);
         let fire: Arc<dyn Fn() + Send + Sync> = Arc::new(move || {
@@ -126,6 +130,26 @@ impl Timer {
         }
     }
 
+    /// The deadline of the earliest job not yet fired.
+    pub(crate) fn next_due(&self) -> Option<Instant> {
+        self.shared.state.lock().jobs.keys().next().map(|k| k.0)
+    }
+
+    /// Fires the earliest job if it is due; returns whether one fired.
+    pub(crate) fn fire_one(&self) -> bool {
+        self.shared.fire_one()
+    }
+
+    /// Holds the timer thread (and `ManualClock::advance`) off firing, so that the caller
+    /// alone fires due jobs with [`Timer::fire_one`]; releasing wakes the thread.
+    pub(crate) fn hold(&self, on: bool) {
+        self.shared.held.store(on, Ordering::SeqCst);
+        if !on {
+            let _st = self.shared.state.lock();
+            self.shared.wake.notify_all();
+        }
+    }
+
     /// Jobs not yet due (cancelled ones do not count).
     pub(crate) fn pending(&self) -> usize {
         self.shared.pending.load(Ordering::Relaxed)
@@ -146,19 +170,28 @@ impl TimerShared {
         entry
     }
 
-    /// Fires every due job, in deadline order.
+    /// Fires every due job, in deadline order (unless held).
     fn fire_due(&self) {
-        while let Some((fire, job)) = self.take_due() {
-            self.stats.timer_fired.fetch_add(1, Ordering::Relaxed);
-            match fire {
-                Fire::Inline => {
-                    if catch_unwind(AssertUnwindSafe(job)).is_err() {
-                        self.stats.panics_caught.fetch_add(1, Ordering::Relaxed);
-                    }
-                }
-                Fire::Submit(target) => target.submit(job),
+        loop {
+            if self.held.load(Ordering::SeqCst) || !self.fire_one() {
+                return;
             }
         }
+    }
+
+    /// Fires the earliest job if it is due.
+    fn fire_one(&self) -> bool {
+        let Some((fire, job)) = self.take_due() else { return false };
+        self.stats.timer_fired.fetch_add(1, Ordering::Relaxed);
+        match fire {
+            Fire::Inline => {
+                if catch_unwind(AssertUnwindSafe(job)).is_err() {
+                    self.stats.panics_caught.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+            Fire::Submit(target) => target.submit(job),
+        }
+        true
     }
 
     fn run(shared: Arc<TimerShared>) {
@@ -173,7 +206,9 @@ impl TimerShared {
             }
             let earliest = st.jobs.keys().next().map(|k| k.0);
             match earliest {
-                Some(due) if due <= shared.clock.now() => continue,
+                Some(due) if due <= shared.clock.now() && !shared.held.load(Ordering::SeqCst) => {
+                    continue;
+                }
                 Some(due) if !shared.manual.load(Ordering::Relaxed) => {
                     shared.wake.wait_until(&mut st, due);
                 }

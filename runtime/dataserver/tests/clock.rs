@@ -133,3 +133,32 @@ fn the_wall_time_of_a_manual_clock_is_the_one_set_and_moves_with_advance() {
     clock.advance(ms(1_250));
     assert_eq!(ds.wall_time(), noon + ms(1_250));
 }
+
+#[test]
+fn advance_settled_fires_each_job_at_its_deadline_after_the_work_of_the_one_before() {
+    let (ds, clock) = manual();
+    let t0 = ds.now();
+    let seen = Arc::new(parking_lot::Mutex::new(Vec::new()));
+    let value = Arc::new(AtomicUsize::new(0));
+    // Two jobs due at once on two executors: the first starts work on a third executor
+    // that the second must see finished; a later one reads the clock.
+    let (a, b, c) = (ds.serial_executor(), ds.serial_executor(), ds.serial_executor());
+    let v = value.clone();
+    ds.run_after(ms(20), Some(&a), move || {
+        c.spawn(move || {
+            std::thread::yield_now();
+            v.store(7, Ordering::SeqCst);
+        });
+    });
+    let (v, s, ds2) = (value.clone(), seen.clone(), ds.clone());
+    ds.run_after(ms(20), Some(&b), move || {
+        s.lock().push((ds2.now() - t0, v.load(Ordering::SeqCst)));
+    });
+    let (s, ds2) = (seen.clone(), ds.clone());
+    ds.run_after(ms(35), None, move || s.lock().push((ds2.now() - t0, 0)));
+    ds.run_after(ms(90), None, || {});
+    ds.advance_settled(&clock, t0 + ms(50));
+    assert_eq!(*seen.lock(), vec![(ms(20), 7), (ms(35), 0)]);
+    assert_eq!(ds.now(), t0 + ms(50));
+    assert_eq!(ds.next_deadline(), Some(t0 + ms(90)));
+}

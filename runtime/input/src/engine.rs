@@ -249,17 +249,17 @@ impl Engine {
         for d in self.devices.values() {
             for g in d.gates.values() {
                 if g.written != Some(g.value) {
-                    at(g.written_at.map_or_else(Instant::now, |w| w + self.period));
+                    at(g.written_at.map_or_else(|| self.ds.now(), |w| w + self.period));
                 }
             }
         }
         for (def, r) in self.defs.iter().zip(&self.rt) {
             if def.kind == "axis" {
                 if r.output != r.target {
-                    at(r.stepped_at.map_or_else(Instant::now, |s| s + self.period));
+                    at(r.stepped_at.map_or_else(|| self.ds.now(), |s| s + self.period));
                 }
                 if r.sent.map_or(r.output != 0.0, |s| s != r.output) {
-                    at(r.sent_at.map_or_else(Instant::now, |s| s + self.period));
+                    at(r.sent_at.map_or_else(|| self.ds.now(), |s| s + self.period));
                 }
             }
             if def.event == "hold"

@@ -85,8 +85,10 @@ struct Shared {
     engine: Mutex<Engine>,
     scheduled: Mutex<Option<Instant>>,
     stop: Arc<AtomicBool>,
-    /// Sources that wait for the layout's bindings (scripts).
+    /// Sources that wait for the layout's bindings.
     deferred: Mutex<Vec<Box<dyn InputSource>>>,
+    /// The input script, played on the DataServer's clock from the first bindings.
+    script: Mutex<Option<ScriptedSource>>,
     threads: Mutex<Vec<std::thread::JoinHandle<()>>>,
     watches: Mutex<Vec<PathWatch>>,
     subs: Mutex<Vec<SubscriptionId>>,
@@ -115,18 +117,22 @@ impl InputModule {
 impl Module for InputModule {
     fn start(&mut self, ctx: &ModuleContext) -> Result<(), String> {
         let engine = Engine::new(&ctx.ds, self.cfg.engine.clone())?;
-        let mut deferred = std::mem::take(&mut self.sources);
-        if let Some(path) = &self.cfg.script {
-            let text =
-                std::fs::read_to_string(path).map_err(|e| format!("input script {path}: {e}"))?;
-            deferred.push(Box::new(ScriptedSource::parse(&text)?));
-        }
+        let deferred = std::mem::take(&mut self.sources);
+        let script = match &self.cfg.script {
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .map_err(|e| format!("input script {path}: {e}"))?;
+                Some(ScriptedSource::parse(&text)?)
+            }
+            None => None,
+        };
         let sh = Arc::new(Shared {
             ctx: ctx.clone(),
             engine: Mutex::new(engine),
             scheduled: Mutex::new(None),
             stop: Arc::new(AtomicBool::new(false)),
             deferred: Mutex::new(deferred),
+            script: Mutex::new(script),
             threads: Mutex::new(Vec::new()),
             watches: Mutex::new(Vec::new()),
             subs: Mutex::new(Vec::new()),
@@ -239,7 +245,7 @@ impl Shared {
             *s = Some(w);
         }
         let weak = Arc::downgrade(self);
-        let delay = w.saturating_duration_since(Instant::now());
+        let delay = w.saturating_duration_since(self.ctx.ds.now());
         self.ctx.ds.run_after(delay, Some(&self.ctx.executor), move || {
             let Some(sh) = weak.upgrade() else { return };
             if sh.stop.load(Ordering::SeqCst) {
@@ -247,13 +253,32 @@ impl Shared {
             }
             {
                 let mut s = sh.scheduled.lock();
-                if s.is_some_and(|x| x <= Instant::now()) {
+                if s.is_some_and(|x| x <= sh.ctx.ds.now()) {
                     *s = None;
                 }
             }
-            let next = sh.engine.lock().tick(Instant::now());
+            let now = sh.ctx.ds.now();
+            let next = sh.engine.lock().tick(now);
             sh.after(next);
         });
+    }
+
+    /// Plays an input script on the DataServer's clock: each step is a timer of its own,
+    /// due its time after now and stamped with that time, so a run on a stepped clock
+    /// (`DataServer::advance_settled`) sees the same events at the same times every run.
+    fn play(self: &Arc<Self>, script: ScriptedSource) {
+        let t0 = self.ctx.ds.now();
+        for ev in script.events_from(t0) {
+            let weak = Arc::downgrade(self);
+            let delay = ev.time.saturating_duration_since(t0);
+            self.ctx.ds.run_after(delay, Some(&self.ctx.executor), move || {
+                if let Some(sh) = weak.upgrade()
+                    && !sh.stop.load(Ordering::SeqCst)
+                {
+                    sh.feed(ev);
+                }
+            });
+        }
     }
 
     fn spawn(self: &Arc<Self>, mut src: Box<dyn InputSource>) {
@@ -283,7 +308,7 @@ impl Shared {
     /// `keyboard.key(name, pressed)`, `mouse.button(name, pressed)`, `mouse.wheel(axis,
     /// delta)`.
     fn window_devices(self: &Arc<Self>) {
-        let now = Instant::now();
+        let now = self.ctx.ds.now();
         for (id, ty) in [("keyboard", DeviceType::Keyboard), ("mouse", DeviceType::Mouse)] {
             let kind = EventKind::Connected {
                 device_type: ty,
@@ -337,7 +362,7 @@ impl Shared {
                 } else {
                     EventKind::Button { button: name, pressed: args[1].as_bool().unwrap_or(false) }
                 };
-                sh.feed(InputEvent::new(Instant::now(), device, kind));
+                sh.feed(InputEvent::new(sh.ctx.ds.now(), device, kind));
                 CallOutcome::Accepted(vec![])
             });
         }
@@ -364,6 +389,10 @@ impl Shared {
                     let waiting: Vec<_> = sh.deferred.lock().drain(..).collect();
                     for s in waiting {
                         sh.spawn(s);
+                    }
+                    let script = sh.script.lock().take();
+                    if let Some(script) = script {
+                        sh.play(script);
                     }
                 }
             })

@@ -525,7 +525,8 @@ impl Sim {
     }
 
     /// Publishes a vehicle method whose handler runs on the simulator's executor with the
-    /// world locked, then republishes the vehicle and records the call and its feedback.
+    /// world locked, then republishes the vehicle. (The call and its outcome are recorded
+    /// once, by whoever made the call: the layout's `--log` record, the `--record` feed.)
     fn method(
         &self,
         guid: Guid,
@@ -533,7 +534,6 @@ impl Sim {
         f: impl Fn(&Sim, &mut Vehicle, &[Value]) -> CallOutcome + Send + Sync + 'static,
     ) -> Result<(), DsError> {
         let sim = self.clone();
-        let method = spec.name;
         self.ctx.ds.publish_method_on(&self.ctx.executor, guid, spec, move |call: Call| {
             let mut w = sim.world.lock();
             let origin = w.cfg.origin;
@@ -541,29 +541,8 @@ impl Sim {
                 call.responder.reply(CallOutcome::NoSuchObject);
                 return;
             };
-            sim.ctx.record(
-                "call",
-                vec![
-                    ("object", Value::str(&v.name)),
-                    ("method", Value::str(method.as_str())),
-                    ("args", Value::List(call.args.clone())),
-                ],
-            );
             let outcome = f(&sim, v, &call.args);
             publish(&sim.ctx.ds, v, origin);
-            let reason = match &outcome {
-                CallOutcome::Refused(r) | CallOutcome::Failed(r) => r.clone(),
-                _ => String::new(),
-            };
-            sim.ctx.record(
-                "feedback",
-                vec![
-                    ("object", Value::str(&v.name)),
-                    ("method", Value::str(method.as_str())),
-                    ("outcome", Value::str(outcome.label())),
-                    ("reason", Value::str(&reason)),
-                ],
-            );
             drop(w);
             call.responder.reply(outcome);
         })
@@ -641,8 +620,8 @@ fn publish(ds: &DataServer, v: &Vehicle, origin: (f64, f64)) {
     }
 }
 
-/// The simulator as a module: ticks [`Sim::step`] at `rate_hz` on its serial executor,
-/// with a fixed `dt`, catching up if a tick was late.
+/// The simulator as a module: ticks [`Sim::step`] at `rate_hz` of the DataServer's clock
+/// on its serial executor, with a fixed `dt`, catching up if a tick was late.
 pub struct SimModule {
     cfg: SimConfig,
     sim: Option<Sim>,
@@ -665,7 +644,7 @@ impl Module for SimModule {
         let sim = Sim::new(ctx.clone(), self.cfg.clone()).map_err(|e| e.to_string())?;
         self.running.store(true, Ordering::SeqCst);
         let period = Duration::from_secs_f64(1.0 / self.cfg.rate_hz);
-        tick(sim.clone(), self.running.clone(), Instant::now(), 0, period);
+        tick(sim.clone(), self.running.clone(), ctx.ds.now(), 0, period);
         self.sim = Some(sim);
         Ok(())
     }
@@ -675,10 +654,13 @@ impl Module for SimModule {
     }
 }
 
+/// Step `n + 1` falls due at `t0 + (n + 1) * period` on the DataServer's clock, and each
+/// step advances the world by `period` whenever it runs: the world follows the run's clock
+/// in fixed steps, never the system's (a late tick catches up, it does not stretch `dt`).
 fn tick(sim: Sim, running: Arc<AtomicBool>, t0: Instant, n: u64, period: Duration) {
     let due = t0 + period.mul_f64((n + 1) as f64);
-    let delay = due.saturating_duration_since(Instant::now());
     let ds = sim.ctx.ds.clone();
+    let delay = due.saturating_duration_since(ds.now());
     let ex = sim.ctx.executor.clone();
     ds.run_after(delay, Some(&ex), move || {
         if !running.load(Ordering::SeqCst) {
