@@ -166,7 +166,7 @@ pub fn main(args: CheckArgs) -> ExitCode {
     }
 }
 
-fn slashed(p: &Path) -> String {
+pub(crate) fn slashed(p: &Path) -> String {
     let s = p.to_string_lossy().replace('\\', "/");
     s.strip_prefix("./").map(str::to_string).unwrap_or(s)
 }
@@ -182,7 +182,11 @@ fn colour_wanted() -> bool {
 
 /// Every `.mocu` and `.toml` under `dir`, sorted; hidden folders and build outputs skipped.
 /// A folder already walked (through a symbolic link, or a link loop) is not walked again.
-fn collect(dir: &Path, seen: &mut std::collections::HashSet<PathBuf>, out: &mut Vec<String>) {
+pub(crate) fn collect(
+    dir: &Path,
+    seen: &mut std::collections::HashSet<PathBuf>,
+    out: &mut Vec<String>,
+) {
     let Ok(real) = std::fs::canonicalize(dir) else { return };
     if !seen.insert(real) {
         return;

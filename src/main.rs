@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod build;
 mod check;
+mod fmt;
 mod frames;
 mod logger;
 mod lsp;
@@ -29,6 +30,8 @@ enum Command {
     Build(build::BuildArgs),
     /// Run the OCU on a layout, a profile or a bundle.
     Run(run::RunArgs),
+    /// Put layout files in the canonical layout (`--check`: only show the diff).
+    Fmt(fmt::FmtArgs),
     /// Serve the Language Server Protocol on stdin/stdout, for editors.
     Lsp(lsp::LspArgs),
 }
@@ -47,6 +50,7 @@ fn main() -> ExitCode {
         Command::Check(args) => check::main(args),
         Command::Build(args) => build::main(args),
         Command::Run(args) => run::main(args),
+        Command::Fmt(args) => fmt::main(args),
         Command::Lsp(args) => lsp::main(args),
     }
 }
