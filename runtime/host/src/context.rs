@@ -90,12 +90,16 @@ impl ModuleContext {
         });
     }
 
-    /// Adds an event to the trial record (`--log`): `call`, `feedback`, …
+    /// Adds an event to the trial record (`--log`, `--record`): `input`, … Stamped now, on
+    /// the DataServer's clock (a `time` field, seconds since the Unix epoch), not when the
+    /// host's events are drained.
     pub fn record(&self, event: &str, fields: Vec<(&str, Value)>) {
+        let time = ("time".to_string(), Value::Float(self.ds.wall_secs()));
+        let fields = fields.into_iter().map(|(k, v)| (k.to_string(), v));
         let _ = self.events.send(HostEvent::Record {
             module: self.name.to_string(),
             event: event.to_string(),
-            fields: fields.into_iter().map(|(k, v)| (k.to_string(), v)).collect(),
+            fields: std::iter::once(time).chain(fields).collect(),
         });
     }
 

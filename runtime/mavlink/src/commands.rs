@@ -7,7 +7,7 @@ use crate::lenient::CommandAck;
 use crate::link::{After, Link};
 use crate::vehicle::{Pending, Upload, Vehicle};
 use mavlink::dialects::common::*;
-use mocu_dataserver::{Call, CallOutcome, Guid, Value};
+use mocu_dataserver::{Call, CallOutcome, Value};
 use mocu_host::world;
 
 /// Why nothing may be sent to `v`, if so.
@@ -26,35 +26,6 @@ pub(crate) fn can_send(v: &Vehicle) -> Result<u8, String> {
 }
 
 impl Link {
-    pub(crate) fn record_feedback(&self, g: Guid, method: &str, outcome: &CallOutcome) {
-        let name = self.inner.ctx.ds.info(g).map(|i| i.name.to_string()).unwrap_or_default();
-        let reason = match outcome {
-            CallOutcome::Refused(r) | CallOutcome::Failed(r) => r.clone(),
-            _ => String::new(),
-        };
-        self.inner.ctx.record(
-            "feedback",
-            vec![
-                ("object", Value::str(&name)),
-                ("method", Value::str(method)),
-                ("outcome", Value::str(outcome.label())),
-                ("reason", Value::str(&reason)),
-            ],
-        );
-    }
-
-    pub(crate) fn record_call(&self, g: Guid, method: &str, args: &[Value]) {
-        let name = self.inner.ctx.ds.info(g).map(|i| i.name.to_string()).unwrap_or_default();
-        self.inner.ctx.record(
-            "call",
-            vec![
-                ("object", Value::str(&name)),
-                ("method", Value::str(method)),
-                ("args", Value::list(args.iter().cloned())),
-            ],
-        );
-    }
-
     pub(crate) fn command(&self, c: Call, label: &'static str, command: MavCmd, p: [f32; 7]) {
         self.start_command(c, label, command, |sysid, compid| {
             MavMessage::COMMAND_LONG(COMMAND_LONG_DATA {
@@ -102,7 +73,6 @@ impl Link {
         command: MavCmd,
         make: impl FnOnce(u8, u8) -> MavMessage,
     ) {
-        self.record_call(c.object, label, &c.args);
         let mut st = self.inner.state.lock();
         let Some(sys) = st.by_guid.get(&c.object).copied() else {
             drop(st);
@@ -115,7 +85,6 @@ impl Link {
         if v.lost {
             drop(st);
             let o = CallOutcome::Failed("link lost: no heartbeat from the vehicle".into());
-            self.record_feedback(c.object, label, &o);
             c.responder.reply(o);
             return;
         }
@@ -124,7 +93,6 @@ impl Link {
             let o = CallOutcome::Refused(format!(
                 "a {label} command is already waiting for its acknowledgement"
             ));
-            self.record_feedback(c.object, label, &o);
             c.responder.reply(o);
             return;
         }
@@ -133,7 +101,6 @@ impl Link {
             Err(why) => {
                 drop(st);
                 let o = CallOutcome::Refused(why);
-                self.record_feedback(c.object, label, &o);
                 c.responder.reply(o);
                 return;
             }
@@ -146,7 +113,6 @@ impl Link {
             msg: msg.clone(),
             attempts: 1,
             responder: c.responder,
-            label,
         });
         drop(st);
         self.send_to(addr, &msg);
@@ -164,12 +130,11 @@ impl Link {
     pub(crate) fn retry(&self, sys: u32, id: u64) {
         let mut st = self.inner.state.lock();
         let Some(v) = st.vehicles.get_mut(&sys) else { return };
-        let (addr, guid) = (v.addr, v.guid);
+        let addr = v.addr;
         if let Some(i) = v.commands.iter().position(|p| p.id == id) {
             if v.commands[i].attempts >= self.inner.cfg.attempts {
                 let p = v.commands.remove(i);
                 drop(st);
-                self.record_feedback(guid, p.label, &CallOutcome::TimedOut);
                 p.responder.reply(CallOutcome::TimedOut);
                 return;
             }
@@ -184,7 +149,6 @@ impl Link {
             if up.attempts >= self.inner.cfg.attempts {
                 let up = v.upload.take().expect("checked above");
                 drop(st);
-                self.record_feedback(guid, "upload_route", &CallOutcome::TimedOut);
                 up.responder.reply(CallOutcome::TimedOut);
                 return;
             }
@@ -206,10 +170,8 @@ impl Link {
     /// Route upload with the mission protocol: MISSION_COUNT, then one MISSION_ITEM_INT per
     /// MISSION_REQUEST(_INT), until MISSION_ACK.
     pub(crate) fn upload(&self, c: Call) {
-        self.record_call(c.object, "upload_route", &c.args);
         let ds = &self.inner.ctx.ds;
         let refuse = |c: Call, o: CallOutcome| {
-            self.record_feedback(c.object, "upload_route", &o);
             c.responder.reply(o);
         };
         let Some(route) = c.args[0].as_guid() else {
@@ -307,13 +269,11 @@ impl Link {
             None => CallOutcome::Refused(format!("MAV_RESULT {}", ack.result.name(""))),
         };
         let p = v.commands.remove(i);
-        self.record_feedback(v.guid, p.label, &outcome);
         after.replies.push((p.responder, outcome));
     }
 
     /// The mission protocol's answers.
     pub(crate) fn answer(&self, v: &mut Vehicle, msg: &MavMessage, after: &mut After) {
-        let g = v.guid;
         match msg {
             // Legacy peers still send MISSION_REQUEST; the answer is MISSION_ITEM_INT either way.
             #[allow(deprecated)]
@@ -337,7 +297,6 @@ impl Link {
                     }
                     other => CallOutcome::Refused(format!("{other:?}")),
                 };
-                self.record_feedback(g, "upload_route", &outcome);
                 after.replies.push((up.responder, outcome));
             }
             _ => {}
