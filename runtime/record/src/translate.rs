@@ -12,8 +12,9 @@ const SNAPSHOT_NS: u64 = 10_000_000_000;
 /// … or after this many `/world/*` changes, whichever comes first.
 const SNAPSHOT_CHANGES: u64 = 20_000;
 
-/// Methods that are not recorded: the display drawing itself, every frame.
-const UNRECORDED_METHODS: &[&str] = &["paint"];
+/// Methods that are not recorded: the display drawing itself, every frame (`paint`) and
+/// asking for it (`invalidate`).
+const UNRECORDED_METHODS: &[&str] = &["paint", "invalidate"];
 
 pub(crate) struct Translator {
     out: Out,
