@@ -292,3 +292,28 @@ async def test_a_did_you_mean_diagnostic_has_a_quick_fix(client: LanguageClient,
     assert edit.new_text == "label"
     line = broken.splitlines()[edit.range.start.line]
     assert line[edit.range.start.character:edit.range.end.character] == "lable"
+
+
+async def format_edits(client: LanguageClient, uri: str):
+    return await client.text_document_formatting_async(
+        types.DocumentFormattingParams(
+            text_document=types.TextDocumentIdentifier(uri=uri),
+            options=types.FormattingOptions(tab_size=2, insert_spaces=True),
+        )
+    )
+
+
+async def test_formatting_gives_mocu_fmts_canonical_text_and_nothing_once_formatted(client: LanguageClient, project):
+    messy = "let   a =    1\nwindow w {layer a   rect 0 0 10 10}\n"
+    uri = open_layout(client, project / "messy.mocu", messy)
+    edits = await format_edits(client, uri)
+    assert len(edits) == 1 and edits[0].range.start == types.Position(line=0, character=0)
+    formatted = edits[0].new_text
+    assert formatted != messy and formatted.startswith("let a = 1\n")
+    again = open_layout(client, project / "formatted.mocu", formatted)
+    assert list(await format_edits(client, again)) == []
+
+
+async def test_formatting_leaves_a_file_with_syntax_errors_alone(client: LanguageClient, project):
+    uri = open_layout(client, project / "broken.mocu", "let a = (1 +\n")
+    assert list(await format_edits(client, uri)) == []

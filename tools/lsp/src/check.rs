@@ -200,3 +200,51 @@ fn publish(
         params,
     )));
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job(version: i32, text: &str) -> Job {
+        let mut loader = OverlayLoader::default();
+        loader.texts.insert("/virtual/a.mocu".into(), text.into());
+        Job { path: "/virtual/a.mocu".into(), version, loader }
+    }
+
+    /// The versions published for the document, in order.
+    fn published(rx: &Receiver<Message>) -> Vec<(Option<i32>, usize)> {
+        rx.try_iter()
+            .filter_map(|m| match m {
+                Message::Notification(n) => {
+                    serde_json::from_value::<PublishDiagnosticsParams>(n.params).ok()
+                }
+                _ => None,
+            })
+            .filter(|p| p.uri.as_str() == "file:///virtual/a.mocu")
+            .map(|p| (p.version, p.diagnostics.len()))
+            .collect()
+    }
+
+    #[test]
+    fn queued_edits_are_checked_once_at_their_newest_version() {
+        let (jobs, rx) = crossbeam_channel::unbounded();
+        let (out, published_rx) = crossbeam_channel::unbounded();
+        let store = Analyses::default();
+        jobs.send(job(1, "let a = \n")).unwrap();
+        jobs.send(job(2, "let a = b\n")).unwrap();
+        jobs.send(job(3, "let a = 1\n")).unwrap();
+        drop(jobs);
+        worker(&rx, &out, &store);
+        assert_eq!(published(&published_rx), vec![(Some(3), 0)]);
+        assert_eq!(store.lock().unwrap()["/virtual/a.mocu"].version, 3);
+    }
+
+    #[test]
+    fn a_diagnostic_carries_mocu_checks_code_range_and_message() {
+        let a = analyse("/virtual/a.mocu", 1, &job(1, "let a = 1\nlet b = a + c\n").loader);
+        let d = &a.by_file["/virtual/a.mocu"][0];
+        assert_eq!(d.code, Some(NumberOrString::String("E0204".into())));
+        assert_eq!((d.range.start.line, d.range.start.character), (1, 12));
+        assert!(d.message.starts_with("unknown name `c`"), "{}", d.message);
+    }
+}

@@ -59,7 +59,7 @@ pub fn capabilities() -> ServerCapabilities {
         rename_provider: Some(OneOf::Left(true)),
         document_symbol_provider: Some(OneOf::Left(true)),
         code_action_provider: Some(CodeActionProviderCapability::Simple(true)),
-        document_formatting_provider: formatting_supported().then_some(OneOf::Left(true)),
+        document_formatting_provider: Some(OneOf::Left(true)),
         semantic_tokens_provider: Some(
             SemanticTokensOptions {
                 legend: SemanticTokensLegend {
@@ -73,10 +73,6 @@ pub fn capabilities() -> ServerCapabilities {
         ),
         ..ServerCapabilities::default()
     }
-}
-
-fn formatting_supported() -> bool {
-    false
 }
 
 /// Runs the server on a connection (stdio, or in memory for tests) until `exit`.
@@ -326,7 +322,13 @@ impl Server {
                 Ok(json(&list))
             }
             Formatting::METHOD => {
-                Err((ErrorCode::MethodNotFound, "formatting is not offered yet".into()))
+                let p: DocumentFormattingParams =
+                    serde_json::from_value(req.params).map_err(bad)?;
+                let Some(path) = uri_to_path(&p.text_document.uri) else {
+                    return Ok(serde_json::Value::Null);
+                };
+                let Some(text) = self.docs.text(&path) else { return Ok(serde_json::Value::Null) };
+                Ok(json(&format(text)?))
             }
             _ => Err((ErrorCode::MethodNotFound, format!("unknown request {}", req.method))),
         }
@@ -359,6 +361,21 @@ impl Server {
         out.sort_by(|a, b| (!a.3, &a.0, a.1).cmp(&(!b.3, &b.0, b.1)));
         out.dedup_by(|a, b| a.0 == b.0 && a.1 == b.1);
         out
+    }
+}
+
+/// `mocu fmt`'s edit of a document: the whole text replaced, or nothing when it is already
+/// formatted or has syntax errors (which its diagnostics show).
+fn format(text: &str) -> Result<Vec<TextEdit>, (ErrorCode, String)> {
+    let mut diags = mocu_language::Diagnostics::new();
+    match mocu_language::format::format_source(mocu_language::FileId(0), text, &mut diags) {
+        Ok(out) if out == text => Ok(Vec::new()),
+        Ok(out) => {
+            let end = LineIndex::new(text).position(text.len());
+            Ok(vec![TextEdit { range: Range::new(Position::new(0, 0), end), new_text: out }])
+        }
+        Err(mocu_language::format::FormatError::Syntax) => Ok(Vec::new()),
+        Err(e) => Err((ErrorCode::RequestFailed, e.to_string())),
     }
 }
 
