@@ -1,0 +1,314 @@
+//! Reading a recording: the `mocu` metadata, the bundle, and messages by time through the
+//! chunk index. A file a killed recorder left (no summary) is read linearly, once, up to
+//! its last complete chunk, and kept in memory.
+
+use mcap::records::Record;
+use mcap::sans_io::indexed_reader::ReadOrder;
+use mcap::sans_io::{
+    IndexedReadEvent, IndexedReader, IndexedReaderOptions, SummaryReadEvent, SummaryReader,
+    SummaryReaderOptions,
+};
+use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+use std::sync::Arc;
+
+/// Why a recording cannot be replayed.
+#[derive(Debug)]
+pub enum ReplayError {
+    Io(String),
+    /// Not an MCAP file, or not one `mocu run --record` wrote.
+    Format(String),
+}
+
+impl std::fmt::Display for ReplayError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ReplayError::Io(e) | ReplayError::Format(e) => f.write_str(e),
+        }
+    }
+}
+
+impl std::error::Error for ReplayError {}
+
+fn format_error(e: mcap::McapError) -> ReplayError {
+    ReplayError::Format(e.to_string())
+}
+
+/// The `mocu` metadata record (docs/recording.md, "The file").
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Meta {
+    /// Every key as written.
+    pub fields: BTreeMap<String, String>,
+    /// The DataServer's wall clock when recording started (ns since the Unix epoch).
+    pub start_ns: Option<u64>,
+}
+
+impl Meta {
+    pub fn get(&self, key: &str) -> Option<&str> {
+        self.fields.get(key).map(String::as_str)
+    }
+}
+
+/// One message, owned: its time, its number and its topic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawMessage {
+    pub log_time: u64,
+    pub sequence: u32,
+    pub topic: Arc<str>,
+    pub data: Vec<u8>,
+}
+
+/// An open recording.
+pub struct Recording {
+    file: File,
+    summary: Option<mcap::Summary>,
+    /// Without a summary: every message, in (log time, sequence) order.
+    linear: Vec<RawMessage>,
+    topics: HashMap<u16, Arc<str>>,
+    meta: Meta,
+    bundle: Option<Vec<u8>>,
+    span: (u64, u64),
+}
+
+impl Recording {
+    pub fn open(path: &Path) -> Result<Recording, ReplayError> {
+        let io = |e: std::io::Error| ReplayError::Io(format!("{}: {e}", path.display()));
+        let mut file = File::open(path).map_err(io)?;
+        let size = file.metadata().map_err(io)?.len();
+        let summary = read_summary(&mut file, size).ok().flatten();
+        let mut r = Recording {
+            file,
+            summary,
+            linear: Vec::new(),
+            topics: HashMap::new(),
+            meta: Meta::default(),
+            bundle: None,
+            span: (0, 0),
+        };
+        match r.summary.clone() {
+            Some(s) => r.index_from_summary(&s)?,
+            None => r.read_linearly(path)?,
+        }
+        if r.meta.fields.is_empty() {
+            return Err(ReplayError::Format(format!(
+                "{}: no `mocu` metadata: not a recording of `mocu run --record`",
+                path.display()
+            )));
+        }
+        Ok(r)
+    }
+
+    pub fn meta(&self) -> &Meta {
+        &self.meta
+    }
+
+    /// The bundle the run started with (`bundle.mocub`), if it was attached.
+    pub fn bundle(&self) -> Option<&[u8]> {
+        self.bundle.as_deref()
+    }
+
+    /// The log times of the first and the last message.
+    pub fn span(&self) -> (u64, u64) {
+        self.span
+    }
+
+    /// Whether the file had its summary (else it was read linearly: a killed recorder).
+    pub fn indexed(&self) -> bool {
+        self.summary.is_some()
+    }
+
+    /// The messages of `topics` with `from <= log_time <= to`, in (log time, sequence)
+    /// order; through the chunk index, reading only the chunks that overlap.
+    pub fn messages(
+        &mut self,
+        from: u64,
+        to: u64,
+        topics: &[&str],
+    ) -> Result<Vec<RawMessage>, ReplayError> {
+        if self.summary.is_none() {
+            let lo = self.linear.partition_point(|m| m.log_time < from);
+            let hi = self.linear.partition_point(|m| m.log_time <= to);
+            return Ok(self.linear[lo..hi]
+                .iter()
+                .filter(|m| topics.contains(&&*m.topic))
+                .cloned()
+                .collect());
+        }
+        let opts = IndexedReaderOptions::new()
+            .include_topics(topics.iter().map(|t| t.to_string()))
+            .starting_at(from)
+            .ending_at(to);
+        let mut out = self.read_indexed(opts, usize::MAX)?;
+        out.sort_by_key(|m| (m.log_time, m.sequence));
+        Ok(out)
+    }
+
+    /// The last message of `topic` with `log_time <= at`.
+    pub fn last_at_or_before(
+        &mut self,
+        topic: &str,
+        at: u64,
+    ) -> Result<Option<RawMessage>, ReplayError> {
+        if self.summary.is_none() {
+            let hi = self.linear.partition_point(|m| m.log_time <= at);
+            return Ok(self.linear[..hi].iter().rev().find(|m| &*m.topic == topic).cloned());
+        }
+        let opts = IndexedReaderOptions::new()
+            .include_topics([topic.to_string()])
+            .ending_at(at)
+            .with_order(ReadOrder::ReverseLogTime);
+        Ok(self.read_indexed(opts, 1)?.pop())
+    }
+
+    fn read_indexed(
+        &mut self,
+        opts: IndexedReaderOptions,
+        limit: usize,
+    ) -> Result<Vec<RawMessage>, ReplayError> {
+        let summary = self.summary.as_ref().expect("indexed reads need the summary");
+        let mut reader = IndexedReader::new_with_options(summary, opts).map_err(format_error)?;
+        let mut out = Vec::new();
+        let mut buf = Vec::new();
+        while out.len() < limit {
+            let Some(event) = reader.next_event() else { break };
+            match event.map_err(format_error)? {
+                IndexedReadEvent::ReadChunkRequest { offset, length } => {
+                    buf.resize(length, 0);
+                    self.file
+                        .seek(SeekFrom::Start(offset))
+                        .and_then(|_| self.file.read_exact(&mut buf))
+                        .map_err(|e| ReplayError::Io(e.to_string()))?;
+                    reader.insert_chunk_record_data(offset, &buf).map_err(format_error)?;
+                }
+                IndexedReadEvent::Message { header, data } => out.push(RawMessage {
+                    log_time: header.log_time,
+                    sequence: header.sequence,
+                    topic: self
+                        .topics
+                        .get(&header.channel_id)
+                        .cloned()
+                        .unwrap_or_else(|| "".into()),
+                    data: data.to_vec(),
+                }),
+            }
+        }
+        Ok(out)
+    }
+
+    fn read_at(&mut self, offset: u64, length: u64) -> Result<Vec<u8>, ReplayError> {
+        let mut buf = vec![0; length as usize];
+        self.file
+            .seek(SeekFrom::Start(offset))
+            .and_then(|_| self.file.read_exact(&mut buf))
+            .map_err(|e| ReplayError::Io(e.to_string()))?;
+        Ok(buf)
+    }
+
+    fn index_from_summary(&mut self, s: &mcap::Summary) -> Result<(), ReplayError> {
+        self.topics = s.channels.iter().map(|(id, c)| (*id, Arc::from(c.topic.as_str()))).collect();
+        for m in &s.metadata_indexes {
+            let buf = self.read_at(m.offset, m.length)?;
+            if let Some(Ok(Record::Metadata(meta))) =
+                mcap::read::LinearReader::sans_magic(&buf).next()
+            {
+                self.take_meta(&meta);
+            }
+        }
+        for a in &s.attachment_indexes {
+            if a.name == "bundle.mocub" {
+                let buf = self.read_at(a.offset, a.length)?;
+                if let Some(Ok(Record::Attachment { data, .. })) =
+                    mcap::read::LinearReader::sans_magic(&buf).next()
+                {
+                    self.bundle = Some(data.into_owned());
+                }
+            }
+        }
+        self.span = match &s.stats {
+            Some(st) => (st.message_start_time, st.message_end_time),
+            None => {
+                let lo = s.chunk_indexes.iter().map(|c| c.message_start_time).min();
+                let hi = s.chunk_indexes.iter().map(|c| c.message_end_time).max();
+                (lo.unwrap_or(0), hi.unwrap_or(0))
+            }
+        };
+        Ok(())
+    }
+
+    /// A file without a summary: every record in order, up to the first that cannot be
+    /// read (a torn chunk).
+    fn read_linearly(&mut self, path: &Path) -> Result<(), ReplayError> {
+        let bytes = std::fs::read(path).map_err(|e| ReplayError::Io(e.to_string()))?;
+        let lenient = mcap::read::Options::IgnoreEndMagic.into();
+        let reader =
+            mcap::read::LinearReader::new_with_options(&bytes, lenient).map_err(format_error)?;
+        let mut records: Vec<Record<'static>> = Vec::new();
+        for rec in reader {
+            let Ok(rec) = rec else { break };
+            records.push(rec.into_owned());
+        }
+        for rec in records {
+            self.take_record(rec);
+        }
+        self.linear.sort_by_key(|m| (m.log_time, m.sequence));
+        self.span = match (self.linear.first(), self.linear.last()) {
+            (Some(a), Some(b)) => (a.log_time, b.log_time),
+            _ => (0, 0),
+        };
+        Ok(())
+    }
+
+    fn take_record(&mut self, rec: Record<'_>) {
+        match rec {
+            Record::Channel(c) => {
+                self.topics.insert(c.id, Arc::from(c.topic.as_str()));
+            }
+            Record::Metadata(m) => self.take_meta(&m),
+            Record::Attachment { header, data, .. } if header.name == "bundle.mocub" => {
+                self.bundle = Some(data.into_owned());
+            }
+            Record::Chunk { header, data } => {
+                let Ok(inner) = mcap::read::ChunkReader::new(header, &data) else { return };
+                for r in inner {
+                    let Ok(r) = r else { break };
+                    self.take_record(r);
+                }
+            }
+            Record::Message { header, data } => self.linear.push(RawMessage {
+                log_time: header.log_time,
+                sequence: header.sequence,
+                topic: self.topics.get(&header.channel_id).cloned().unwrap_or_else(|| "".into()),
+                data: data.into_owned(),
+            }),
+            _ => {}
+        }
+    }
+
+    fn take_meta(&mut self, m: &mcap::records::Metadata) {
+        if m.name == "mocu" {
+            self.meta.fields = m.metadata.clone().into_iter().collect();
+            self.meta.start_ns = self.meta.get("start_ns").and_then(|s| s.parse().ok());
+        }
+    }
+}
+
+fn read_summary(file: &mut File, size: u64) -> Result<Option<mcap::Summary>, ReplayError> {
+    let io = |e: std::io::Error| ReplayError::Io(e.to_string());
+    let mut reader =
+        SummaryReader::new_with_options(SummaryReaderOptions::default().with_file_size(size));
+    while let Some(event) = reader.next_event() {
+        match event.map_err(format_error)? {
+            SummaryReadEvent::ReadRequest(n) => {
+                let read = file.read(reader.insert(n)).map_err(io)?;
+                reader.notify_read(read);
+            }
+            SummaryReadEvent::SeekRequest(to) => {
+                let pos = file.seek(to).map_err(io)?;
+                reader.notify_seeked(pos);
+            }
+        }
+    }
+    Ok(reader.finish())
+}

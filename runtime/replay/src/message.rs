@@ -1,0 +1,182 @@
+//! The messages replay applies, parsed from their JSON (docs/recording.md, "Channels").
+
+use crate::value::{decode, kind};
+use mocu_dataserver::{ObjectInfo, PropMeta, Value};
+use serde_json::Value as Json;
+
+/// `/world/object`: an object created, changed or deleted (GUIDs are the recording's).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ObjectChange {
+    Created {
+        guid: u64,
+        parent: u64,
+        index: usize,
+        info: ObjectInfo,
+    },
+    /// Renamed or retyped; moved when `to` is given (parent, index).
+    Changed {
+        guid: u64,
+        info: Option<ObjectInfo>,
+        to: Option<(u64, usize)>,
+    },
+    Deleted {
+        guid: u64,
+    },
+}
+
+/// `/world/property`: a property created (with its metadata), set or deleted.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PropertyChange {
+    Created { object: u64, name: String, value: Value, meta: Option<PropMeta> },
+    Set { object: u64, name: String, value: Value },
+    Deleted { object: u64, name: String },
+}
+
+/// `/world/snapshot`: the whole world model as of change `seq` (a keyframe).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Snapshot {
+    pub seq: u64,
+    /// Parents before children.
+    pub objects: Vec<SnapshotObject>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SnapshotObject {
+    pub guid: u64,
+    pub parent: u64,
+    pub index: usize,
+    pub info: ObjectInfo,
+    pub properties: Vec<(String, Value, Option<PropMeta>)>,
+}
+
+fn text<'a>(j: &'a Json, k: &str) -> Option<&'a str> {
+    j.get(k)?.as_str()
+}
+
+fn info(j: &Json) -> Option<ObjectInfo> {
+    let i = ObjectInfo::new(text(j, "name")?, text(j, "type").unwrap_or(""));
+    Some(i.subtype(text(j, "subtype").unwrap_or("")))
+}
+
+/// Property metadata as written on `created` (`{"kind", "units", …}`).
+pub fn meta(j: &Json) -> PropMeta {
+    let mut m = PropMeta { kind: text(j, "kind").and_then(kind), ..PropMeta::default() };
+    if let Some(u) = text(j, "units") {
+        m = m.units(u);
+    }
+    if let Some(r) = text(j, "representation") {
+        m = m.representation(r);
+    }
+    if let Some(d) = text(j, "description") {
+        m = m.describe(d);
+    }
+    if let Some([lo, hi]) = j.get("range").and_then(Json::as_array).map(Vec::as_slice)
+        && let (Some(lo), Some(hi)) = (lo.as_f64(), hi.as_f64())
+    {
+        m = m.range(lo, hi);
+    }
+    if let Some(hz) = j.get("rate_hz").and_then(Json::as_f64) {
+        m = m.rate(hz);
+    }
+    m
+}
+
+impl ObjectChange {
+    pub fn parse(data: &[u8]) -> Option<ObjectChange> {
+        let j: Json = serde_json::from_slice(data).ok()?;
+        let guid = j.get("guid")?.as_u64()?;
+        let place = || Some((j.get("parent")?.as_u64()?, j.get("index")?.as_u64()? as usize));
+        Some(match text(&j, "op")? {
+            "created" => {
+                let (parent, index) = place()?;
+                ObjectChange::Created { guid, parent, index, info: info(&j)? }
+            }
+            "changed" => ObjectChange::Changed { guid, info: info(&j), to: place() },
+            "deleted" => ObjectChange::Deleted { guid },
+            _ => return None,
+        })
+    }
+}
+
+impl PropertyChange {
+    pub fn parse(data: &[u8]) -> Option<PropertyChange> {
+        let j: Json = serde_json::from_slice(data).ok()?;
+        let object = j.get("object")?.as_u64()?;
+        let name = text(&j, "name")?.to_string();
+        let value = || decode(text(&j, "kind")?, j.get("value")?);
+        Some(match text(&j, "op")? {
+            "created" => PropertyChange::Created {
+                object,
+                name,
+                value: value()?,
+                meta: j.get("meta").map(meta),
+            },
+            "set" => PropertyChange::Set { object, name, value: value()? },
+            "deleted" => PropertyChange::Deleted { object, name },
+            _ => return None,
+        })
+    }
+}
+
+impl Snapshot {
+    pub fn parse(data: &[u8]) -> Option<Snapshot> {
+        let j: Json = serde_json::from_slice(data).ok()?;
+        let mut objects = Vec::new();
+        for o in j.get("objects")?.as_array()? {
+            let mut properties = Vec::new();
+            for p in o.get("properties").and_then(Json::as_array).into_iter().flatten() {
+                let Some(v) =
+                    decode(text(p, "kind").unwrap_or(""), p.get("value").unwrap_or(&Json::Null))
+                else {
+                    continue;
+                };
+                properties.push((text(p, "name")?.to_string(), v, p.get("meta").map(meta)));
+            }
+            objects.push(SnapshotObject {
+                guid: o.get("guid")?.as_u64()?,
+                parent: o.get("parent")?.as_u64()?,
+                index: o.get("index").and_then(Json::as_u64).unwrap_or(u64::MAX) as usize,
+                info: info(o)?,
+                properties,
+            });
+        }
+        Some(Snapshot { seq: j.get("seq").and_then(Json::as_u64).unwrap_or(0), objects })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_documented_examples_parse() {
+        let o = br#"{"op": "created", "guid": 12, "parent": 3, "index": 0, "path": "root.vehicles.usv1",
+ "name": "usv1", "type": "vehicle", "subtype": "usv"}"#;
+        assert_eq!(
+            ObjectChange::parse(o),
+            Some(ObjectChange::Created {
+                guid: 12,
+                parent: 3,
+                index: 0,
+                info: ObjectInfo::new("usv1", "vehicle").subtype("usv")
+            })
+        );
+        let p = br#"{"op": "set", "object": 14, "path": "root.vehicles.usv1.nav.speed", "name": "speed",
+ "kind": "float", "value": 3.25, "unit": "m/s"}"#;
+        assert_eq!(
+            PropertyChange::parse(p),
+            Some(PropertyChange::Set {
+                object: 14,
+                name: "speed".into(),
+                value: Value::Float(3.25)
+            })
+        );
+        let c = br#"{"op": "created", "object": 14, "name": "speed", "kind": "float", "value": 0.0,
+ "meta": {"kind": "float", "units": "m/s", "range": [0, 30], "rate_hz": 20}}"#;
+        let Some(PropertyChange::Created { meta: Some(m), .. }) = PropertyChange::parse(c) else {
+            panic!("not parsed");
+        };
+        assert_eq!(m.units.as_deref(), Some("m/s"));
+        assert_eq!((m.range, m.rate_hz), (Some((0.0, 30.0)), Some(20.0)));
+    }
+}

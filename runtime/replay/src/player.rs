@@ -1,0 +1,205 @@
+//! The timeline: a fresh DataServer on a manual clock, moved by the replay. Trial time is
+//! the recording's `log_time`; the clock's wall time reads it (what a layout shows as the
+//! time of day), and its monotonic time only ever moves forward (timers stay ordered, even
+//! across a seek back).
+
+use crate::file::{RawMessage, Recording, ReplayError};
+use crate::message::{ObjectChange, PropertyChange, Snapshot};
+use crate::topics::{OBJECT, PROPERTY, SNAPSHOT};
+use crate::world::World;
+use mocu_dataserver::{Clock, DataServer, ManualClock};
+use std::collections::VecDeque;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant, UNIX_EPOCH};
+
+/// How much of the recording is read ahead while playing (one indexed read each).
+const READ_AHEAD: u64 = 1_000_000_000;
+
+pub struct Player {
+    rec: Recording,
+    ds: DataServer,
+    clock: ManualClock,
+    world: World,
+    /// Log time applied up to (inclusive).
+    cursor: u64,
+    /// Messages after `cursor`, up to `loaded_to` (inclusive).
+    ahead: VecDeque<RawMessage>,
+    loaded_to: u64,
+    /// The clock's instant that stands for log time `anchor.1` (moved at each seek).
+    anchor: (Instant, u64),
+}
+
+impl Player {
+    /// Opens a recording and a fresh DataServer on a clock standing at its start.
+    pub fn open(path: &Path) -> Result<Player, ReplayError> {
+        let rec = Recording::open(path)?;
+        let clock = ManualClock::new();
+        let ds = DataServer::with_clock(Default::default(), Arc::new(clock.clone()));
+        let start = rec.meta().start_ns.unwrap_or(rec.span().0).min(rec.span().0);
+        let before = start.saturating_sub(1);
+        clock.set_wall(UNIX_EPOCH + Duration::from_nanos(before));
+        let world = World::new(&ds);
+        Ok(Player {
+            rec,
+            world,
+            cursor: before,
+            ahead: VecDeque::new(),
+            loaded_to: before,
+            anchor: (clock.now(), before),
+            ds,
+            clock,
+        })
+    }
+
+    pub fn ds(&self) -> &DataServer {
+        &self.ds
+    }
+
+    pub fn clock(&self) -> &ManualClock {
+        &self.clock
+    }
+
+    pub fn recording(&self) -> &Recording {
+        &self.rec
+    }
+
+    /// The screen the trial was shown on: `root.display`'s `width` and `height` as first
+    /// recorded (in the first ten seconds).
+    pub fn recorded_screen(&mut self) -> Option<(u32, u32)> {
+        let from = self.rec.span().0;
+        let msgs =
+            self.rec.messages(from, from.saturating_add(10_000_000_000), &[PROPERTY]).ok()?;
+        let side = |name: &str| {
+            msgs.iter().find_map(|m| {
+                let j: serde_json::Value = serde_json::from_slice(&m.data).ok()?;
+                (j.get("path")?.as_str()?.strip_prefix("root.display.") == Some(name))
+                    .then(|| j.get("value")?.as_f64())
+                    .flatten()
+            })
+        };
+        let (w, h) = (side("width")?, side("height")?);
+        (w >= 1.0 && h >= 1.0 && w <= 16384.0 && h <= 16384.0).then_some((w as u32, h as u32))
+    }
+
+    /// Trial time zero (log time, ns): when recording started.
+    pub fn start_ns(&self) -> u64 {
+        self.rec.meta().start_ns.unwrap_or(self.rec.span().0).min(self.rec.span().0)
+    }
+
+    /// The last message's log time.
+    pub fn end_ns(&self) -> u64 {
+        self.rec.span().1
+    }
+
+    /// The log time replayed up to.
+    pub fn now_ns(&self) -> u64 {
+        self.cursor
+    }
+
+    /// Seconds since the start of the trial, of the replay's position.
+    pub fn trial_secs(&self) -> f64 {
+        self.cursor.saturating_sub(self.start_ns()) as f64 / 1e9
+    }
+
+    /// The log time `secs` into the trial.
+    pub fn at_secs(&self, secs: f64) -> u64 {
+        self.start_ns().saturating_add((secs.max(0.0) * 1e9).round() as u64)
+    }
+
+    /// Jumps to log time `to`: the world as the last keyframe at or before it says, then
+    /// the changes after the keyframe up to `to`, applied at once; the clock's wall time
+    /// reads `to`. Forward jumps of under a second play instead.
+    pub fn seek(&mut self, to: u64) -> Result<(), ReplayError> {
+        if to >= self.cursor && to - self.cursor < READ_AHEAD {
+            return self.advance_to(to);
+        }
+        self.ds.quiesce();
+        let key = self.rec.last_at_or_before(SNAPSHOT, to)?;
+        let snapshot = key.as_ref().and_then(|m| Snapshot::parse(&m.data)).unwrap_or_default();
+        self.world.sync(&snapshot);
+        let from = key.as_ref().map_or(0, |k| k.log_time);
+        let after = |m: &RawMessage| match &key {
+            None => true,
+            Some(k) => m.log_time > k.log_time || (m.sequence.wrapping_sub(k.sequence) as i32) > 0,
+        };
+        for m in self.rec.messages(from, to, &[OBJECT, PROPERTY])? {
+            if after(&m) {
+                self.apply(&m);
+            }
+        }
+        self.cursor = to;
+        self.ahead.clear();
+        self.loaded_to = to;
+        self.anchor = (self.clock.now(), to);
+        self.clock.set_wall(UNIX_EPOCH + Duration::from_nanos(to));
+        self.ds.advance_settled(&self.clock, self.clock.now());
+        Ok(())
+    }
+
+    /// Plays forward to log time `to`: each change at its recorded time, the timers due
+    /// between two changes fired in order first (`DataServer::advance_settled`).
+    pub fn advance_to(&mut self, to: u64) -> Result<(), ReplayError> {
+        if to <= self.cursor {
+            return Ok(());
+        }
+        loop {
+            if self.ahead.is_empty() && self.loaded_to < to {
+                let hi = self.loaded_to.saturating_add(READ_AHEAD);
+                let msgs = self.rec.messages(self.loaded_to + 1, hi, &[OBJECT, PROPERTY])?;
+                self.ahead.extend(msgs);
+                // Past the last message there is nothing more to read.
+                self.loaded_to = if hi >= self.end_ns() { u64::MAX } else { hi };
+            }
+            match self.ahead.front() {
+                Some(m) if m.log_time <= to => {
+                    let m = self.ahead.pop_front().expect("looked at above");
+                    self.move_clock(m.log_time);
+                    self.apply(&m);
+                    self.cursor = self.cursor.max(m.log_time);
+                }
+                None if self.loaded_to < to => {}
+                _ => {
+                    self.move_clock(to);
+                    self.cursor = to;
+                    break;
+                }
+            }
+        }
+        self.ds.quiesce();
+        Ok(())
+    }
+
+    /// Plays forward by `d` of trial time.
+    pub fn step(&mut self, d: Duration) -> Result<(), ReplayError> {
+        self.advance_to(self.cursor.saturating_add(d.as_nanos() as u64))
+    }
+
+    /// Moves the clock to log time `t`: settled when a timer falls due on the way, else
+    /// straight there (nothing to fire).
+    fn move_clock(&mut self, t: u64) {
+        let target = self.anchor.0 + Duration::from_nanos(t.saturating_sub(self.anchor.1));
+        if self.ds.next_deadline().is_some_and(|d| d <= target) {
+            self.ds.advance_settled(&self.clock, target);
+        } else {
+            let now = self.clock.now();
+            self.clock.advance(target.saturating_duration_since(now));
+        }
+    }
+
+    fn apply(&mut self, m: &RawMessage) {
+        match &*m.topic {
+            OBJECT => {
+                if let Some(c) = ObjectChange::parse(&m.data) {
+                    self.world.apply_object(&c);
+                }
+            }
+            PROPERTY => {
+                if let Some(c) = PropertyChange::parse(&m.data) {
+                    self.world.apply_property(&c);
+                }
+            }
+            _ => {}
+        }
+    }
+}

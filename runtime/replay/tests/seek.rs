@@ -1,0 +1,68 @@
+//! Seeking: the world at a trial time is the same whether the replay jumps there (the last
+//! keyframe before it, then the changes after it) or plays there from the start, and the
+//! same with or without keyframes.
+
+mod support;
+
+use mocu_replay::Player;
+use support::{Synthetic, value, write};
+
+const SMALL: Synthetic =
+    Synthetic { seconds: 30, vehicles: 3, props: 4, hz: 10, keyframe_secs: 10 };
+
+/// `usv{v}.p{k}` in the replayed world.
+fn prop(p: &Player, v: u64, k: u64) -> Option<f64> {
+    let ds = p.ds();
+    let g = ds.resolve(&["vehicles", &format!("usv{v}")])?;
+    ds.try_get(g, format!("p{k}").as_str().into())?.as_f64()
+}
+
+fn world(p: &Player) -> Vec<Option<f64>> {
+    (0..SMALL.vehicles)
+        .flat_map(|v| (0..SMALL.props).map(move |k| (v, k)))
+        .map(|(v, k)| prop(p, v, k))
+        .collect()
+}
+
+#[test]
+fn seeking_gives_the_world_that_playing_there_gives() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trial.mcap");
+    write(&path, SMALL);
+    for secs in [0.05, 9.95, 10.0, 12.34, 25.0, 30.0] {
+        let mut played = Player::open(&path).unwrap();
+        let t = played.at_secs(secs);
+        played.advance_to(t).unwrap();
+        let mut jumped = Player::open(&path).unwrap();
+        jumped.seek(t).unwrap();
+        assert_eq!(world(&jumped), world(&played), "at {secs} s");
+        let step = (secs * SMALL.hz as f64 + 1e-9).floor() as u64;
+        assert_eq!(prop(&jumped, 2, 3), Some(value(step, 3)), "at {secs} s");
+    }
+}
+
+#[test]
+fn seeking_back_and_forth_ends_where_a_fresh_seek_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trial.mcap");
+    write(&path, SMALL);
+    let mut p = Player::open(&path).unwrap();
+    for secs in [25.0, 3.0, 28.5, 11.2] {
+        let t = p.at_secs(secs);
+        p.seek(t).unwrap();
+    }
+    let mut fresh = Player::open(&path).unwrap();
+    fresh.seek(fresh.at_secs(11.2)).unwrap();
+    assert_eq!(world(&p), world(&fresh));
+    assert_eq!(prop(&p, 0, 0), Some(value(112, 0)));
+}
+
+#[test]
+fn a_recording_without_keyframes_seeks_by_playing_its_changes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("trial.mcap");
+    write(&path, Synthetic { keyframe_secs: 0, ..SMALL });
+    let mut p = Player::open(&path).unwrap();
+    p.seek(p.at_secs(21.0)).unwrap();
+    assert_eq!(prop(&p, 1, 2), Some(value(210, 2)));
+}
