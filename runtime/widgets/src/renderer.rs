@@ -277,7 +277,7 @@ impl Shared {
 
     fn on_widget_prop(self: &Arc<Self>, window: Guid, w: Guid, n: &Notification) {
         let Some(name) = n.property_name() else { return };
-        let now = Instant::now();
+        let now = self.ds.now();
         let bounds = widget_bounds(&self.ds, w);
         let old = {
             let mut st = self.state.lock();

@@ -1,0 +1,129 @@
+//! The replay's controls and its timeline strip: what the keyboard asks for, and a window
+//! along the bottom of the screen showing where the replay is, whether it plays, and how
+//! fast. Shown only in a window: headless frames (and golden frames) are the layout's alone.
+
+use mocu_dataserver::{
+    CallOutcome, DataServer, Guid, MethodSpec, ObjectInfo, ParamSpec, ValueKind,
+};
+use mocu_display::{Align, Baseline, Canvas, Color, Point, Rect, TextStyle};
+use std::sync::Arc;
+use std::sync::Mutex;
+
+/// What a key asks the replay to do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Control {
+    PlayPause,
+    Step,
+    Slower,
+    Faster,
+    Start,
+    End,
+}
+
+impl Control {
+    /// The control a key press stands for (`space`, `right`, `[`, `]`, `home`, `end`).
+    pub fn of_key(name: &str) -> Option<Control> {
+        Some(match name {
+            "space" => Control::PlayPause,
+            "right" => Control::Step,
+            "[" => Control::Slower,
+            "]" => Control::Faster,
+            "home" => Control::Start,
+            "end" => Control::End,
+            _ => return None,
+        })
+    }
+}
+
+/// What the strip shows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Position {
+    pub secs: f64,
+    pub length: f64,
+    pub playing: bool,
+    pub speed: f64,
+}
+
+/// Height of the strip, in screen pixels.
+pub const HEIGHT: f32 = 28.0;
+
+/// Publishes `root.operator.inputs.keyboard.key(name, pressed)` (what the window calls for
+/// each key) sending each press to `controls`.
+pub fn keyboard(ds: &DataServer, controls: crossbeam_channel::Sender<Control>) -> Option<Guid> {
+    let ensure = |parent: Guid, name: &str, kind: &str| {
+        ds.find_child(parent, name)
+            .ok()
+            .flatten()
+            .or_else(|| ds.create_object(parent, ObjectInfo::new(name, kind)).ok())
+    };
+    let op = ensure(Guid::ROOT, "operator", "operator")?;
+    let inputs = ensure(op, "inputs", "inputs")?;
+    let kb = ensure(inputs, "keyboard", "keyboard")?;
+    let spec = MethodSpec::new("key")
+        .param(ParamSpec::new("name", ValueKind::String))
+        .param(ParamSpec::new("pressed", ValueKind::Bool));
+    let _ = ds.publish_method_fn(kb, spec, move |args| {
+        let pressed = args.get(1).and_then(|v| v.as_bool()).unwrap_or(false);
+        let name = args.first().and_then(|v| v.as_str()).unwrap_or("");
+        if pressed && let Some(c) = Control::of_key(name) {
+            let _ = controls.send(c);
+        }
+        CallOutcome::Accepted(vec![])
+    });
+    Some(kb)
+}
+
+/// The strip: a window over the bottom of the screen, painted from `position`.
+pub fn strip(ds: &DataServer, screen: (u32, u32), position: Arc<Mutex<Position>>) -> Option<Guid> {
+    let display = mocu_display::ensure_display_object(ds, screen.0, screen.1).ok()?;
+    let (w, h) = (screen.0 as f32, screen.1 as f32);
+    let rect = Rect::new(0.0, h - HEIGHT, w, HEIGHT);
+    let g =
+        mocu_display::publish_window(ds, display, "replay_timeline", "replay", 1000, rect).ok()?;
+    mocu_display::claim_window(ds, g, move |c, _| {
+        paint(c, w, &position.lock().unwrap_or_else(|e| e.into_inner()))
+    })
+    .ok()?;
+    Some(g)
+}
+
+fn paint(c: &mut dyn Canvas, w: f32, p: &Position) {
+    c.fill_rect(Rect::new(0.0, 0.0, w, HEIGHT), Color::rgba(12, 16, 24, 230));
+    let bar = Rect::new(150.0, HEIGHT / 2.0 - 3.0, (w - 300.0).max(10.0), 6.0);
+    c.fill_rect(bar, Color::rgb(70, 78, 92));
+    let done = if p.length > 0.0 { (p.secs / p.length).clamp(0.0, 1.0) as f32 } else { 0.0 };
+    c.fill_rect(Rect::new(bar.x, bar.y, bar.w * done, bar.h), Color::rgb(56, 189, 248));
+    c.fill_rect(Rect::new(bar.x + bar.w * done - 2.0, 5.0, 4.0, HEIGHT - 10.0), Color::WHITE);
+    let text = TextStyle::new(14.0, Color::WHITE).baseline(Baseline::Middle);
+    let state = if p.playing { "PLAYING" } else { "PAUSED" };
+    c.draw_text(&format!("{state} ×{}", p.speed), Point::new(10.0, HEIGHT / 2.0), &text);
+    c.draw_text(
+        &format!("{:.1} / {:.1} s", p.secs, p.length),
+        Point::new(w - 10.0, HEIGHT / 2.0),
+        &text.clone().align(Align::Right),
+    );
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_documented_keys_are_the_controls() {
+        let keys = ["space", "right", "[", "]", "home", "end", "x"];
+        let got: Vec<_> = keys.iter().map(|k| Control::of_key(k)).collect();
+        use Control::*;
+        assert_eq!(
+            got,
+            vec![
+                Some(PlayPause),
+                Some(Step),
+                Some(Slower),
+                Some(Faster),
+                Some(Start),
+                Some(End),
+                None
+            ]
+        );
+    }
+}
