@@ -155,7 +155,11 @@ fn worker(jobs: &Receiver<Job>, out: &Sender<Message>, store: &Analyses) {
         }
         take_newest(jobs, &mut pending);
         let job = pending.remove(0);
-        let analysis = analyse(&job.path, job.version, &job.loader);
+        // A checker bug on one text must not end the diagnostics of the session.
+        let checked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            analyse(&job.path, job.version, &job.loader)
+        }));
+        let Ok(analysis) = checked else { continue };
         // A newer edit of this document arrived while checking: this result is stale.
         take_newest(jobs, &mut pending);
         if pending.iter().any(|j| j.path == job.path) {

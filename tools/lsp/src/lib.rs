@@ -83,8 +83,14 @@ pub fn serve(connection: Connection) -> Result<(), String> {
     let analyses = Analyses::default();
     let worker = check::spawn_worker(rx, connection.sender.clone(), analyses.clone())
         .map_err(|e| e.to_string())?;
-    let mut server =
-        Server { docs: Documents::default(), jobs, analyses, out: connection.sender.clone() };
+    let mut server = Server {
+        docs: Documents::default(),
+        generation: 0,
+        indexes: HashMap::new(),
+        jobs,
+        analyses,
+        out: connection.sender.clone(),
+    };
     for msg in &connection.receiver {
         match msg {
             Message::Request(req) => {
@@ -105,6 +111,11 @@ pub fn serve(connection: Connection) -> Result<(), String> {
 
 struct Server {
     docs: Documents,
+    /// Bumped by every change of the open documents: an index built at the same generation
+    /// is still right.
+    generation: u64,
+    /// The last index built for each document, with its generation.
+    indexes: HashMap<String, (u64, std::rc::Rc<Index>)>,
     jobs: Sender<Job>,
     analyses: Analyses,
     out: Sender<Message>,
@@ -112,6 +123,7 @@ struct Server {
 
 impl Server {
     fn notification(&mut self, n: Notification) {
+        self.generation += 1;
         match n.method.as_str() {
             DidOpenTextDocument::METHOD => {
                 let Ok(p) = serde_json::from_value::<DidOpenTextDocumentParams>(n.params) else {
@@ -192,15 +204,35 @@ impl Server {
         let _ = self.jobs.send(Job { path: path.to_string(), version, loader: self.docs.loader() });
     }
 
+    /// The index of the document at `path` over the open documents as they are now.
+    fn index(&mut self, path: &str) -> std::rc::Rc<Index> {
+        if let Some((g, ix)) = self.indexes.get(path)
+            && *g == self.generation
+        {
+            return ix.clone();
+        }
+        let ix = std::rc::Rc::new(Index::build(path, &self.docs.loader()));
+        self.indexes.insert(path.to_string(), (self.generation, ix.clone()));
+        ix
+    }
+
     fn analysis(&self, path: &str) -> Option<std::sync::Arc<check::Analysis>> {
         self.analyses.lock().ok()?.get(path).cloned()
     }
 
     fn request(&mut self, req: Request) -> Response {
         let id = req.id.clone();
-        match self.answer(req) {
-            Ok(v) => Response::new_ok(id, v),
-            Err((code, message)) => Response::new_err(id, code as i32, message),
+        let method = req.method.clone();
+        // A bug in one answer fails that request, not the editor's session.
+        let answer = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| self.answer(req)));
+        match answer {
+            Ok(Ok(v)) => Response::new_ok(id, v),
+            Ok(Err((code, message))) => Response::new_err(id, code as i32, message),
+            Err(_) => Response::new_err(
+                id,
+                ErrorCode::InternalError as i32,
+                format!("mocu lsp failed answering {method} (a bug: please report it)"),
+            ),
         }
     }
 
@@ -299,7 +331,7 @@ impl Server {
                 let Some(path) = uri_to_path(&p.text_document.uri) else {
                     return Ok(serde_json::Value::Null);
                 };
-                let ix = Index::build(&path, &self.docs.loader());
+                let ix = self.index(&path);
                 Ok(json(&DocumentSymbolResponse::Nested(symbols::document_symbols(&ix, &path))))
             }
             SemanticTokensFullRequest::METHOD => {
@@ -307,7 +339,7 @@ impl Server {
                 let Some(path) = uri_to_path(&p.text_document.uri) else {
                     return Ok(serde_json::Value::Null);
                 };
-                let ix = Index::build(&path, &self.docs.loader());
+                let ix = self.index(&path);
                 let data = symbols::semantic_tokens(&ix, &path);
                 Ok(json(&SemanticTokensResult::Tokens(SemanticTokens { result_id: None, data })))
             }
@@ -335,25 +367,31 @@ impl Server {
     }
 
     /// The document's path, its index and the byte offset of a position.
-    fn locate(&self, at: &TextDocumentPositionParams) -> Option<(String, Index, usize)> {
+    fn locate(
+        &mut self,
+        at: &TextDocumentPositionParams,
+    ) -> Option<(String, std::rc::Rc<Index>, usize)> {
         let path = uri_to_path(&at.text_document.uri)?;
-        let loader = self.docs.loader();
-        let ix = Index::build(&path, &loader);
+        let ix = self.index(&path);
         let off = LineIndex::new(ix.text(&path)).offset(at.position);
         Some((path, ix, off))
     }
 
     /// Every occurrence of a definition: in `ix`, and in every open document's files (a file
     /// used by several layouts is renamed in all of them): (path, start, end, is the definition).
-    fn uses_everywhere(&self, ix: &Index, def: &index::DefKey) -> Vec<(String, u32, u32, bool)> {
+    fn uses_everywhere(
+        &mut self,
+        ix: &Index,
+        def: &index::DefKey,
+    ) -> Vec<(String, u32, u32, bool)> {
         let mut out: Vec<(String, u32, u32, bool)> =
             ix.uses_of(def).iter().map(|o| (o.path.clone(), o.start, o.end, o.is_def)).collect();
-        let loader = self.docs.loader();
-        for root in self.docs.open.keys() {
-            if ix.modules.first().is_some_and(|m| &m.path == root) {
+        let roots: Vec<String> = self.docs.open.keys().cloned().collect();
+        for root in roots {
+            if ix.modules.first().is_some_and(|m| m.path == root) {
                 continue;
             }
-            let other = Index::build(root, &loader);
+            let other = self.index(&root);
             out.extend(
                 other.uses_of(def).iter().map(|o| (o.path.clone(), o.start, o.end, o.is_def)),
             );
