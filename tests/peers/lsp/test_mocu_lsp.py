@@ -317,3 +317,33 @@ async def test_formatting_gives_mocu_fmts_canonical_text_and_nothing_once_format
 async def test_formatting_leaves_a_file_with_syntax_errors_alone(client: LanguageClient, project):
     uri = open_layout(client, project / "broken.mocu", "let a = (1 +\n")
     assert list(await format_edits(client, uri)) == []
+
+
+COMMON = """let limit = 5
+window alerts { layer 9  rect 0 0 10% 10% }
+"""
+
+USER = """use "common.mocu" as c
+use "common.mocu"
+let over = c.limit > 3
+watch w { when over then show alerts }
+"""
+
+
+async def test_definition_rename_and_references_reach_across_use_files(client: LanguageClient, project):
+    (project / "common.mocu").write_text(COMMON)
+    user = open_layout(client, project / "user.mocu", USER)
+    common = open_layout(client, project / "common.mocu")
+    # `c.limit` → the let in common.mocu; `alerts` → the window there.
+    loc = await client.text_document_definition_async(types.DefinitionParams(**at(user, 2, USER.splitlines()[2].index("limit"))))
+    assert loc.uri == common and (loc.range.start.line, loc.range.start.character) == (0, 4)
+    loc = await client.text_document_definition_async(types.DefinitionParams(**at(user, 3, USER.splitlines()[3].index("alerts"))))
+    assert loc.uri == common and loc.range.start.line == 1
+    # Renaming the let where it is defined edits its use in the other open document.
+    edit = await client.text_document_rename_async(types.RenameParams(**at(common, 0, 4), new_name="ceiling"))
+    assert sorted(edit.changes) == sorted([common, user])
+    assert [e.range.start.line for e in edit.changes[user]] == [2]
+    refs = await client.text_document_references_async(
+        types.ReferenceParams(**at(common, 1, 7), context=types.ReferenceContext(include_declaration=False))
+    )
+    assert [(r.uri, r.range.start.line) for r in refs] == [(user, 3)]
