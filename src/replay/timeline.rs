@@ -109,6 +109,21 @@ mod tests {
     use super::*;
 
     #[test]
+    fn key_presses_in_the_window_reach_the_replay_as_controls() {
+        let ds = DataServer::default();
+        let (tx, rx) = crossbeam_channel::unbounded();
+        let kb = keyboard(&ds, tx).expect("the keyboard object");
+        assert_eq!(ds.resolve(&["operator", "inputs", "keyboard"]), Some(kb));
+        for (key, pressed) in [("space", true), ("space", false), ("]", true), ("q", true)] {
+            let args =
+                vec![mocu_dataserver::Value::str(key), mocu_dataserver::Value::Bool(pressed)];
+            let outcome = ds.call_wait(kb, "key", args, None);
+            assert_eq!(outcome, CallOutcome::Accepted(vec![]));
+        }
+        assert_eq!(rx.try_iter().collect::<Vec<_>>(), vec![Control::PlayPause, Control::Faster]);
+    }
+
+    #[test]
     fn the_documented_keys_are_the_controls() {
         let keys = ["space", "right", "[", "]", "home", "end", "x"];
         let got: Vec<_> = keys.iter().map(|k| Control::of_key(k)).collect();
