@@ -185,19 +185,53 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
                 report_unclosed_string(file, &stack, diags, &mut out, i);
                 stack.retain(|f| matches!(f, Frame::Bracket));
             }
+            // `'text'`: one diagnostic for the pair, whose text is then skipped.
             b'\'' => {
-                diags
+                let close = quoted_until(text, i + 1, &['\'']);
+                let end = close.map_or(i + 1, |c| c + 1);
+                let d = diags
                     .error(
                         codes::CONFUSABLE,
-                        Span::new(file, i, i + 1),
+                        Span::new(file, i, end),
                         "strings are written in double quotes",
                     )
-                    .label("single quote")
-                    .help("write \"…\" instead of '…'");
-                out.broken.push(i..i + 1);
+                    .label("single quotes");
+                match close {
+                    Some(c) => d.help(format!("write \"{}\"", &text[i + 1..c])),
+                    None => d.help("write \"…\" instead of '…'"),
+                };
+                out.broken.push(i..end);
+                i = end;
+                continue;
             }
             _ if b >= 0x80 => {
                 let c = text[i..].chars().next().unwrap_or('\u{FFFD}');
+                // A typographic quote and the one that closes it on the same line: one
+                // diagnostic for the pair (an editor's "smart quotes").
+                let pair = SMART_QUOTES.contains(&c).then(|| {
+                    quoted_until(text, i + c.len_utf8(), SMART_QUOTES)
+                        .map(|close| (close, text[close..].chars().next().unwrap_or(c)))
+                });
+                if let Some(Some((close, last))) = pair {
+                    let end = close + last.len_utf8();
+                    diags
+                        .error(
+                            codes::CONFUSABLE,
+                            Span::new(file, i, end),
+                            format!(
+                                "`{c}` and `{last}` (U+{:04X}, U+{:04X}: typographic quotes) look like `\"` but are not part of the language",
+                                c as u32, last as u32
+                            ),
+                        )
+                        .label("typographic quotes")
+                        .help(format!(
+                            "write \"{}\" (an editor's \"smart quotes\" put them there)",
+                            &text[i + c.len_utf8()..close]
+                        ));
+                    out.broken.push(i..end);
+                    i = end;
+                    continue;
+                }
                 if let Some((_, name, instead)) = CONFUSABLES.iter().find(|(x, _, _)| *x == c) {
                     let help = if instead.is_empty() {
                         "delete it: it is invisible and means nothing here".to_string()
@@ -229,6 +263,16 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
     }
     report_unclosed_string(file, &stack, diags, &mut out, bytes.len());
     out
+}
+
+/// Typographic quotes, opening or closing.
+const SMART_QUOTES: &[char] =
+    &['\u{201C}', '\u{201D}', '\u{201E}', '\u{00AB}', '\u{00BB}', '\u{2018}', '\u{2019}'];
+
+/// The offset of the first of `quotes` at or after `from` on the same line.
+fn quoted_until(text: &str, from: usize, quotes: &[char]) -> Option<usize> {
+    let line = &text[from..line_end(text.as_bytes(), from)];
+    line.char_indices().find(|(_, ch)| quotes.contains(ch)).map(|(k, _)| from + k)
 }
 
 /// Pushes a frame; past [`MAX_NESTING`] reports E0106 once and returns true (not pushed).

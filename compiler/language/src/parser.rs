@@ -38,6 +38,9 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
                     .label("expected an item here")
                     .help(crate::syntax_hints::stray(word).unwrap_or_else(|| "a file is made of `use`, `let`, `window`, `in`, `component`, `bind`, `menu`, `watch` and `for each` items".into()));
             }
+            // An unclosed comment or string after it took the rest of the file: said there.
+            ChunkKind::Unclosed(open)
+                if scan.broken.iter().any(|b| b.start > open && b.end >= text.len()) => {}
             ChunkKind::Unclosed(open) => {
                 diags
                     .error(
@@ -395,7 +398,9 @@ fn report_pest_error(
         ErrorVariant::CustomError { message } => (message.clone(), None),
     };
     let before = &src[..pos.min(src.len())];
-    if let Some((m, h)) = crate::syntax_hints::hint(first_word(src), before, &found, &message) {
+    let after = &src[pos.min(src.len())..];
+    let item = crate::syntax_hints::inner_item(first_word(src), before);
+    if let Some((m, h)) = crate::syntax_hints::hint(item, before, &found, &message, after) {
         message = m.unwrap_or(message);
         help = Some(h);
     }

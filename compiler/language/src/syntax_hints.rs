@@ -35,7 +35,16 @@ const UNIT_WORDS: &[(&str, &str)] = &[
     ("mins", "min"),
     ("m", "min"),
     ("milliseconds", "ms"),
+    ("millisecond", "ms"),
     ("millis", "ms"),
+    ("msecs", "ms"),
+    ("msec", "ms"),
+    ("hours", "min"),
+    ("hour", "min"),
+    // The right unit, but apart from its number (`5 s`).
+    ("ms", "ms"),
+    ("s", "s"),
+    ("min", "min"),
     ("degrees", "deg"),
     ("degree", "deg"),
     ("pixels", "px"),
@@ -76,19 +85,76 @@ const KEY_ALIASES: &[(&str, &str)] = &[
 pub const UNITS: &str =
     "units are ms, s, min, px, deg and %, written right after the number (`5s`)";
 
-/// A better (message, help) for a syntax error, when the mistake is recognised.
-/// `before` is the item's text up to the error.
+/// The item keyword of the innermost block open at the end of `before` (`watch` for a watch
+/// inside a `for each`), or `item` (the first word of the top-level item).
+pub fn inner_item<'a>(item: &'a str, before: &'a str) -> &'a str {
+    let Some(open) = opening_of(before) else { return item };
+    let line = before[..open].rsplit('\n').next().unwrap_or("");
+    let word = line.split_whitespace().next().unwrap_or("");
+    if crate::parser::ITEM_KEYWORDS.contains(&word) { word } else { item }
+}
+
+/// A better (message, help) for a syntax error, when the mistake is recognised. `item` is
+/// the keyword of the innermost item ([`inner_item`]), `before` the item's text up to the
+/// error and `after` the rest of it.
 pub fn hint(
     item: &str,
     before: &str,
     found: &str,
     message: &str,
+    after: &str,
 ) -> Option<(Option<String>, String)> {
     let prev = before.split_whitespace().last().unwrap_or("");
-    if found == "," && before.split_whitespace().rev().take(4).any(|w| w == "at" || w == "rect") {
+    // `a: Label { … }` where a widget cannot go: in a window's body or a template's.
+    let widget = found == ":" && is_word(prev)
+        || is_word(found) && after[found.len()..].trim_start().starts_with(':');
+    if widget && matches!(item, "window" | "for" | "watch" | "menu" | "bind") {
+        let name = if found == ":" { prev } else { found };
+        let component = after.trim_start_matches(|c: char| c == ':' || is_word_char(c));
+        let component = component.trim_start_matches([':', ' ', '\t']);
+        let component = first_word_of(component);
+        let message = match opening_of(before) {
+            None => format!("`{name}: {component}` is outside any `in` block"),
+            Some(_) => format!("`{name}:` starts a widget, which cannot go in a `{item}`"),
+        };
         return Some((
-            Some("`at` and `rect` take numbers separated by spaces, not commas".into()),
-            "write `at 10 10 100 100`".into(),
+            Some(message),
+            format!(
+                "a widget goes inside `in WINDOW {{ … }}`: `in main {{ {name}: {component} {{ at X Y … }} }}`"
+            ),
+        ));
+    }
+    if item == "watch" && matches!(found, "for" | "clear" | "repeat") && before.contains("then") {
+        return Some((
+            Some(format!("`{found}` comes before `then` in a watch")),
+            SHAPES[0].1.to_string(),
+        ));
+    }
+    if found.starts_with('.') && before.ends_with("..") {
+        let max = found.trim_start_matches('.');
+        let min = before.trim_end_matches('.').split_whitespace().last().unwrap_or("MIN");
+        let name = before.split_whitespace().rev().nth(1).filter(|w| is_word(w)).unwrap_or("");
+        return Some((
+            Some("a range's ends are joined by two dots `..`".into()),
+            range_help(name, min, if max.is_empty() { "MAX" } else { max }),
+        ));
+    }
+    if found.starts_with(',')
+        && let Some(kw) =
+            before.split_whitespace().rev().take(4).find(|w| *w == "at" || *w == "rect")
+    {
+        // The numbers as written, from the keyword to the first word that is no number.
+        let from = before.rfind(kw).unwrap_or(0) + kw.len();
+        let text = format!("{}{after}", &before[from..]);
+        let numbers: Vec<&str> = text
+            .split(|c: char| c == ',' || c.is_whitespace())
+            .filter(|w| !w.is_empty())
+            .take_while(|w| w.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.'))
+            .take(4)
+            .collect();
+        return Some((
+            Some(format!("`{kw}` takes numbers separated by spaces, not commas")),
+            format!("write `{kw} {}`", numbers.join(" ")),
         ));
     }
     if let Some((_, unit)) = UNIT_WORDS.iter().find(|(w, _)| *w == found)
@@ -209,6 +275,16 @@ pub fn key_help(name: &str) -> String {
 pub fn range_help(name: &str, min: &str, max: &str) -> String {
     let name = if name.is_empty() { String::new() } else { format!("{name} ") };
     format!("a range is written `{name}{min} .. {max}` (MIN `..` MAX)")
+}
+
+fn is_word_char(c: char) -> bool {
+    c.is_ascii_alphanumeric() || c == '_'
+}
+
+/// The first word of `s` (letters, digits, `_`), or `Component` when there is none.
+fn first_word_of(s: &str) -> &str {
+    let end = s.find(|c: char| !is_word_char(c)).unwrap_or(s.len());
+    if end == 0 { "Component" } else { &s[..end] }
 }
 
 fn is_word(w: &str) -> bool {
