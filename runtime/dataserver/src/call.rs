@@ -116,6 +116,19 @@ impl DataServer {
     ) {
         let name = name.into();
         let done = self.recorded_call(guid, name, &args, done);
+        self.call_unfed(guid, name, args, options, done)
+    }
+
+    /// [`DataServer::call`] without the change feed: a stream's delivery to each receiver
+    /// (the message itself is fed once, when sent).
+    pub(crate) fn call_unfed(
+        &self,
+        guid: Guid,
+        name: PropName,
+        args: Vec<Value>,
+        options: Option<CallOptions>,
+        done: impl FnOnce(CallOutcome) + Send + 'static,
+    ) {
         let method = match self.resolve_method(guid, name) {
             Ok(m) => m,
             Err(outcome) => return done(outcome),
@@ -126,7 +139,7 @@ impl DataServer {
         };
         let options = options.unwrap_or(method.spec.defaults);
         let slot = Arc::new(ReplySlot {
-            state: Mutex::new(SlotState { done: Some(done), timeout: None }),
+            state: Mutex::new(SlotState { done: Some(Box::new(done)), timeout: None }),
             server: Arc::downgrade(&self.inner),
         });
         if let Some(t) = options.timeout {

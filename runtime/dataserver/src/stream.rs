@@ -287,12 +287,19 @@ impl DataServer {
             };
             let ds = self.clone();
             let assoc = r.assoc;
-            self.call(r.target, r.method, msg.to_vec(), Some(CallOptions::immediate()), move |o| {
-                if matches!(o, CallOutcome::NoSuchObject | CallOutcome::NoSuchMethod) {
-                    // The receiver is gone: the association goes with it.
-                    let _ = ds.delete_object(assoc);
-                }
-            });
+            // Fed once, as the message sent (`Change::Sent`), not again as a call per receiver.
+            self.call_unfed(
+                r.target,
+                r.method,
+                msg.to_vec(),
+                Some(CallOptions::immediate()),
+                move |o| {
+                    if matches!(o, CallOutcome::NoSuchObject | CallOutcome::NoSuchMethod) {
+                        // The receiver is gone: the association goes with it.
+                        let _ = ds.delete_object(assoc);
+                    }
+                },
+            );
         }
     }
 

@@ -21,6 +21,7 @@ use crossbeam_channel::{Receiver, Sender};
 use mocu_dataserver::{ChangeFeed, DataServer, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::Mutex;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
@@ -61,6 +62,13 @@ impl EventTopic {
     }
 }
 
+/// What the command line hands the writer thread.
+enum Input {
+    Event(Event),
+    /// Answered once everything recorded before it is handed to the file.
+    Sync(Sender<()>),
+}
+
 pub(crate) struct Event {
     pub at: SystemTime,
     pub source: String,
@@ -79,8 +87,8 @@ pub struct Totals {
 /// A recording in progress. Dropping it finishes the file (summary and footer).
 pub struct Recorder {
     ds: DataServer,
-    events: Option<Sender<Event>>,
-    thread: Option<JoinHandle<Result<Totals, String>>>,
+    events: Mutex<Option<Sender<Input>>>,
+    thread: Mutex<Option<JoinHandle<Result<Totals, String>>>>,
 }
 
 impl Recorder {
@@ -100,13 +108,19 @@ impl Recorder {
         if let Some(b) = &header.bundle {
             out.attach("bundle.mocub", "application/x-mocu-bundle", now, b)?;
         }
+        out.flush()?;
         let feed = ds.change_feed();
+        let existing = world::walk(ds);
         let (tx, rx) = crossbeam_channel::unbounded();
         let thread = std::thread::Builder::new()
             .name("mocu-record".into())
-            .spawn(move || write_loop(out, feed, rx, now))
+            .spawn(move || write_loop(out, feed, rx, now, existing))
             .map_err(|e| e.to_string())?;
-        Ok(Recorder { ds: ds.clone(), events: Some(tx), thread: Some(thread) })
+        Ok(Recorder {
+            ds: ds.clone(),
+            events: Mutex::new(Some(tx)),
+            thread: Mutex::new(Some(thread)),
+        })
     }
 
     /// Records an event now (on the DataServer's clock): `source` is `layout` or a module's
@@ -117,29 +131,42 @@ impl Recorder {
 
     /// Records an event stamped `at` (when it happened at its source).
     pub fn event_at(&self, at: SystemTime, source: &str, event: &str, fields: &[(&str, Value)]) {
-        if let Some(tx) = &self.events {
-            let fields = fields.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
-            let _ = tx.send(Event { at, source: source.into(), event: event.into(), fields });
+        let fields = fields.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+        let e = Event { at, source: source.into(), event: event.into(), fields };
+        if let Some(tx) = &*lock(&self.events) {
+            let _ = tx.send(Input::Event(e));
+        }
+    }
+
+    /// Returns once every change and event recorded before the call is handed to the file
+    /// (in the writer's buffers; on disk at the next flush). For benchmarks and tests.
+    pub fn sync(&self) {
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        let sent = lock(&self.events).as_ref().is_some_and(|e| e.send(Input::Sync(tx)).is_ok());
+        if sent {
+            let _ = rx.recv();
         }
     }
 
     /// Writes what is queued, the summary and the footer; returns what the file holds.
-    pub fn finish(mut self) -> Result<Totals, String> {
-        self.stop()
-    }
-
-    fn stop(&mut self) -> Result<Totals, String> {
-        self.events = None;
-        match self.thread.take() {
+    /// Later changes and events are not recorded; a second call returns empty totals.
+    pub fn finish(&self) -> Result<Totals, String> {
+        lock(&self.events).take();
+        let thread = lock(&self.thread).take();
+        match thread {
             Some(t) => t.join().map_err(|_| "the recorder panicked".to_string())?,
             None => Ok(Totals::default()),
         }
     }
 }
 
+fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 impl Drop for Recorder {
     fn drop(&mut self) {
-        if let Err(e) = self.stop() {
+        if let Err(e) = self.finish() {
             eprintln!("mocu: recording: {e}");
         }
     }
@@ -149,16 +176,33 @@ pub(crate) fn nanos(t: SystemTime) -> u64 {
     t.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos().min(u64::MAX as u128) as u64)
 }
 
+/// Changes written between two looks at the clock and the events.
+const BATCH: usize = 4096;
+
+/// Writes every change queued now, then answers a [`Recorder::sync`].
+fn synced(
+    t: &mut translate::Translator,
+    feed: &ChangeFeed,
+    done: Sender<()>,
+) -> Result<(), String> {
+    for c in feed.try_iter().take(feed.len()) {
+        t.change(c)?;
+    }
+    let _ = done.send(());
+    Ok(())
+}
+
 /// The writer thread: changes and events as they come, a flush at most [`FLUSH_EVERY`]
 /// after the first unflushed message; ends (finishing the file) when the recorder is
 /// dropped. An idle recording sleeps.
 fn write_loop(
     out: file::Out,
     feed: ChangeFeed,
-    events: Receiver<Event>,
+    events: Receiver<Input>,
     start: u64,
+    existing: Vec<world::Existing>,
 ) -> Result<Totals, String> {
-    let mut t = translate::Translator::new(out, start)?;
+    let mut t = translate::Translator::new(out, start, existing)?;
     let mut dirty_since: Option<Instant> = None;
     let changes = feed.receiver();
     loop {
@@ -167,11 +211,12 @@ fn write_loop(
             (d + FLUSH_EVERY).saturating_duration_since(Instant::now())
         });
         let mut open = true;
-        let mut got = false;
+        let before = t.written();
         crossbeam_channel::select! {
-            recv(changes) -> c => if let Ok(c) = c { t.change(c)?; got = true; },
+            recv(changes) -> c => if let Ok(c) = c { t.change(c)? },
             recv(events) -> e => match e {
-                Ok(e) => { t.event(e)?; got = true; }
+                Ok(Input::Event(e)) => t.event(e)?,
+                Ok(Input::Sync(done)) => synced(&mut t, &feed, done)?,
                 Err(_) => open = false,
             },
             default(wait) => {}
@@ -179,14 +224,17 @@ fn write_loop(
         if !open {
             break;
         }
-        // Whatever else is queued, in one go.
-        for c in feed.try_iter() {
+        // What else is queued, in one go (bounded, so that a flush is never starved).
+        for c in feed.try_iter().take(BATCH) {
             t.change(c)?;
         }
-        for e in events.try_iter() {
-            t.event(e)?;
+        for e in events.try_iter().take(BATCH) {
+            match e {
+                Input::Event(e) => t.event(e)?,
+                Input::Sync(done) => synced(&mut t, &feed, done)?,
+            }
         }
-        if got && dirty_since.is_none() {
+        if t.written() > before && dirty_since.is_none() {
             dirty_since = Some(Instant::now());
         }
         if dirty_since.is_some_and(|d| d.elapsed() >= FLUSH_EVERY) {

@@ -32,7 +32,7 @@ pub(crate) struct Translator {
 }
 
 impl Translator {
-    pub fn new(out: Out, start: u64) -> Result<Translator, String> {
+    pub fn new(out: Out, start: u64, existing: Vec<world::Existing>) -> Result<Translator, String> {
         let mut t = Translator {
             out,
             world: World::new(),
@@ -45,6 +45,31 @@ impl Translator {
             since_snapshot: 0,
             event_seq: 0,
         };
+        // What existed before the recording: created at its start, number 0.
+        for e in existing {
+            let stamp = |change| Stamped {
+                seq: 0,
+                wall: std::time::UNIX_EPOCH + std::time::Duration::from_nanos(start),
+                change,
+            };
+            if e.guid != Guid::ROOT {
+                t.change(stamp(Change::Created {
+                    object: e.guid,
+                    parent: e.parent,
+                    index: e.index,
+                    info: e.info,
+                }))?;
+            }
+            for p in e.props {
+                t.change(stamp(Change::PropertySet {
+                    object: e.guid,
+                    name: p.name,
+                    value: p.value,
+                    meta: p.meta,
+                    created: true,
+                }))?;
+            }
+        }
         t.snapshot()?;
         Ok(t)
     }
@@ -61,7 +86,8 @@ impl Translator {
 
     pub fn change(&mut self, s: Stamped) -> Result<(), String> {
         let t = nanos(s.wall);
-        let due = self.since_snapshot > 0
+        let due = s.seq > 0
+            && self.since_snapshot > 0
             && (t.saturating_sub(self.snapshot_time) >= SNAPSHOT_NS
                 || self.since_snapshot >= SNAPSHOT_CHANGES);
         if due {
@@ -331,6 +357,11 @@ impl Translator {
         };
         self.out.write(ch, self.event_seq, t, &self.buf)?;
         Ok(())
+    }
+
+    /// Messages written so far.
+    pub fn written(&self) -> u64 {
+        self.out.messages
     }
 
     pub fn flush(&mut self) -> Result<(), String> {

@@ -22,6 +22,51 @@ pub(crate) struct Prop {
     pub meta: Option<Arc<PropMeta>>,
 }
 
+/// An object as it existed when the recording started, with its properties.
+pub(crate) struct Existing {
+    pub guid: Guid,
+    pub parent: Guid,
+    pub index: usize,
+    pub info: ObjectInfo,
+    pub props: Vec<Prop>,
+}
+
+/// The world model as it is now (parents before children, root's properties first as
+/// root's entry), read after the feed was opened: a change racing the walk shows in both.
+pub(crate) fn walk(ds: &mocu_dataserver::DataServer) -> Vec<Existing> {
+    let mut out = Vec::new();
+    let props = |g: Guid| -> Vec<Prop> {
+        ds.properties(g)
+            .unwrap_or_default()
+            .into_iter()
+            .map(|(name, value)| {
+                let meta =
+                    ds.meta(g, name).ok().filter(|m| *m != PropMeta::default()).map(Arc::new);
+                Prop { name, value, meta }
+            })
+            .collect()
+    };
+    out.push(Existing {
+        guid: Guid::ROOT,
+        parent: Guid::ROOT,
+        index: 0,
+        info: ObjectInfo::new("root", "root"),
+        props: props(Guid::ROOT),
+    });
+    let mut stack: Vec<(Guid, Guid, usize)> = Vec::new();
+    let push = |stack: &mut Vec<(Guid, Guid, usize)>, parent: Guid| {
+        let children = ds.children(parent).unwrap_or_default();
+        stack.extend(children.into_iter().enumerate().rev().map(|(i, c)| (c, parent, i)));
+    };
+    push(&mut stack, Guid::ROOT);
+    while let Some((g, parent, index)) = stack.pop() {
+        let Ok(info) = ds.info(g) else { continue };
+        out.push(Existing { guid: g, parent, index, info, props: props(g) });
+        push(&mut stack, g);
+    }
+    out
+}
+
 pub(crate) struct World {
     objects: HashMap<Guid, Obj>,
 }
@@ -51,6 +96,10 @@ impl World {
     }
 
     pub fn create(&mut self, g: Guid, parent: Guid, index: usize, info: ObjectInfo) {
+        if self.objects.contains_key(&g) {
+            // Already read from the world when the recording started.
+            return;
+        }
         let path = format!("{}.{}", self.path(parent), info.name).into();
         if let Some(p) = self.objects.get_mut(&parent) {
             let i = index.min(p.children.len());

@@ -238,3 +238,28 @@ fn events_go_to_the_trial_record_or_the_layout_channel_by_their_name() {
     );
     assert_eq!(events[1].2["fields"]["n"], "NaN");
 }
+
+#[test]
+fn what_existed_before_the_recording_started_is_its_first_records_and_first_keyframe() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let v = ds.create_object(ds.root(), ObjectInfo::new("usv1", "vehicle")).unwrap();
+    ds.create_property(v, "fuel", Value::Float(0.5), PropMeta::typed(ValueKind::Float).units("%"))
+        .unwrap();
+    clock.advance(ms(100));
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    ds.set(v, "fuel", Value::Float(0.4)).unwrap();
+    rec.finish().unwrap();
+    let msgs = read(&file);
+    let objects = on(&msgs, "/world/object");
+    assert_eq!((objects[0].1, &objects[0].2["path"]), (100_000_000, &"root.usv1".into()));
+    let fuel: Vec<(String, f64)> = on(&msgs, "/world/property")
+        .iter()
+        .map(|(_, _, j)| (j["op"].as_str().unwrap().into(), j["value"].as_f64().unwrap()))
+        .collect();
+    assert_eq!(fuel, vec![("created".into(), 0.5), ("set".into(), 0.4)]);
+    let snap = &on(&msgs, "/world/snapshot")[0].2;
+    assert_eq!(snap["seq"], 0);
+    assert_eq!(snap["objects"][0]["properties"][0]["value"], 0.5);
+}
