@@ -100,6 +100,11 @@ impl ChangeFeed {
         self.rx.try_iter()
     }
 
+    /// The queue itself, to wait on it beside other channels (`crossbeam_channel::select!`).
+    pub fn receiver(&self) -> &crossbeam_channel::Receiver<Stamped> {
+        &self.rx
+    }
+
     /// How many changes are queued.
     pub fn len(&self) -> usize {
         self.rx.len()
