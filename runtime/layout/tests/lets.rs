@@ -195,3 +195,29 @@ fn a_shared_let_is_evaluated_once_per_change_and_its_readers_once_each() {
         assert_eq!(ds.get(x, "text").unwrap(), Value::str("—"), "jit: {jit}");
     }
 }
+
+#[test]
+fn a_widget_reading_a_vehicle_through_a_shared_let_goes_stale_with_the_vehicle() {
+    // x and y read the speed only through a1, a shared `let` (a node of its own): they are
+    // stale when usv1 says its data is old, as if they read the speed themselves.
+    let text = "use \"stdlib/gauges.mocu\"\nlet a1 = root.vehicles.usv1.nav.speed + 1\n\
+                window hud { layer 1  rect 0 0 100 100 }\nin hud {\n\
+                x: Label { at 0 0  text \"{a1}\" }\n  y: Label { at 0 0  text \"{a1 * 2}\" }\n}\n";
+    let program = program(text);
+    let ds = DataServer::default();
+    let layout = Layout::load(&ds, &program, common::config(), Arc::new(NullSink)).unwrap();
+    assert_eq!(layout.stats().shared_lets, 1);
+    let vs = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+    let v = ds.create_object(vs, ObjectInfo::new("usv1", "usv")).unwrap();
+    let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+    ds.set(nav, "speed", Value::Float(1.0)).unwrap();
+    layout.settle();
+    let x = ds.resolve(&["display", "hud", "x"]).unwrap();
+    assert_ne!(ds.try_get(x, PropName::new("stale")), Some(Value::Bool(true)));
+    ds.set(v, "link_lost", Value::Bool(true)).unwrap();
+    layout.settle();
+    for w in ["x", "y"] {
+        let g = ds.resolve(&["display", "hud", w]).unwrap();
+        assert_eq!(ds.try_get(g, PropName::new("stale")), Some(Value::Bool(true)), "{w}");
+    }
+}
