@@ -133,13 +133,21 @@ impl SkiaCanvas {
     /// The pixmap pixels a drawing inside user-space `user`, grown by `pad` user units,
     /// may touch (all of the clip when the box is not finite).
     fn device_box(&self, user: Rect, pad: f32) -> IRect {
+        match self.device_extent(user, pad) {
+            Some(r) => r.intersect(&self.state.clip),
+            None => self.state.clip,
+        }
+    }
+
+    /// [`SkiaCanvas::device_box`] before the clip (`None` when the box is not finite).
+    fn device_extent(&self, user: Rect, pad: f32) -> Option<IRect> {
         let d = self.device().map_rect(user.inset(-pad)).inset(-2.0);
         if !(d.x.is_finite() && d.y.is_finite() && d.w.is_finite() && d.h.is_finite()) {
-            return self.state.clip;
+            return None;
         }
         let big = 1.0e9;
         let d = Rect::new(d.x.max(-big), d.y.max(-big), d.w.min(2.0 * big), d.h.min(2.0 * big));
-        IRect::covering(d).intersect(&self.state.clip)
+        Some(IRect::covering(d))
     }
 
     /// User coordinates to pixmap pixels.
@@ -565,9 +573,15 @@ impl Canvas for SkiaCanvas {
         if !self.visible(path_bounds(&p), 0.0) {
             return;
         }
+        if let Brush::Solid(color) = brush
+            && let Some(e) = self.device_extent(path_bounds(&p), 0.0)
+            && self.cached_path(path, &p, None, *color, e)
+        {
+            return;
+        }
+        let b = self.device_box(path_bounds(&p), 0.0);
         let Some(paint) = skia_paint(brush) else { return };
         let t = self.device().to_skia();
-        let b = self.device_box(path_bounds(&p), 0.0);
         self.draw_with(b, |pm, mask| pm.fill_path(&p, &paint, FillRule::Winding, t, mask));
     }
 
@@ -581,11 +595,18 @@ impl Canvas for SkiaCanvas {
         if !self.visible(path_bounds(&p), stroke.width) {
             return;
         }
-        let Some(paint) = skia_paint(brush) else { return };
-        let t = self.device().to_skia();
         let s = skia_stroke(stroke);
         // Miter joins reach miter_limit * width / 2 from the path.
-        let b = self.device_box(path_bounds(&p), stroke.width * s.miter_limit.max(1.0));
+        let pad = stroke.width * s.miter_limit.max(1.0);
+        if let Brush::Solid(color) = brush
+            && let Some(e) = self.device_extent(path_bounds(&p), pad)
+            && self.cached_path(path, &p, Some(&s), *color, e)
+        {
+            return;
+        }
+        let b = self.device_box(path_bounds(&p), pad);
+        let Some(paint) = skia_paint(brush) else { return };
+        let t = self.device().to_skia();
         self.draw_with(b, |pm, mask| pm.stroke_path(&p, &paint, &s, t, mask));
     }
 

@@ -123,6 +123,95 @@ impl SkiaCanvas {
     }
 }
 
+/// Path elements (points) cached at most: longer paths are drawn directly.
+const PATH_MAX: usize = 64;
+
+impl SkiaCanvas {
+    /// Fills (`stroke` None) or strokes a small path in a solid colour through its cached
+    /// coverage mask: tiny-skia rasterises it once, opaque black onto a transparent
+    /// pixmap the size of `bbox` (the pixmap pixels it may touch), under the same
+    /// transform shifted by whole pixels, and the mask's alpha is the coverage. Keyed by
+    /// the path's points, the transform and the stroke, so a needle or an outline that
+    /// did not move is blended, not rasterised again. False when not applicable (a long
+    /// path, a large one).
+    pub(super) fn cached_path(
+        &mut self,
+        path: &crate::path::Path,
+        sk: &tiny_skia::Path,
+        stroke: Option<&tiny_skia::Stroke>,
+        color: Color,
+        bbox: IRect,
+    ) -> bool {
+        use crate::path::PathEl;
+        let els = path.elements();
+        if els.len() > PATH_MAX || bbox.area() > MASK_MAX || bbox.is_empty() {
+            return false;
+        }
+        let dev = self.device();
+        let mut key: Vec<u32> = Vec::with_capacity(16 + els.len() * 3);
+        key.push(3);
+        key.extend([dev.sx, dev.ky, dev.kx, dev.sy, dev.tx, dev.ty].map(f32::to_bits));
+        key.extend([bbox.x, bbox.y, bbox.w, bbox.h].map(|v| v as u32));
+        match stroke {
+            None => key.push(0),
+            Some(s) => {
+                key.extend([1, s.width.to_bits(), s.miter_limit.to_bits()]);
+                key.extend([s.line_cap as u32, s.line_join as u32]);
+                if let Some(d) = &s.dash {
+                    // The dash pattern as the stroke was built from it.
+                    key.push(2);
+                    key.extend(format!("{d:?}").bytes().map(u32::from));
+                }
+            }
+        }
+        for el in els {
+            let pts: &[crate::geom::Point] = match el {
+                PathEl::MoveTo(p) => {
+                    key.push(10);
+                    std::slice::from_ref(p)
+                }
+                PathEl::LineTo(p) => {
+                    key.push(11);
+                    std::slice::from_ref(p)
+                }
+                PathEl::QuadTo(a, b) => {
+                    key.push(12);
+                    key.extend([a.x, a.y].map(f32::to_bits));
+                    std::slice::from_ref(b)
+                }
+                PathEl::CubicTo(a, b, c) => {
+                    key.push(13);
+                    key.extend([a.x, a.y, b.x, b.y].map(f32::to_bits));
+                    std::slice::from_ref(c)
+                }
+                PathEl::Close => {
+                    key.push(14);
+                    &[]
+                }
+            };
+            for p in pts {
+                key.extend([p.x.to_bits(), p.y.to_bits()]);
+            }
+        }
+        let paint = tiny_skia::Paint { anti_alias: true, ..tiny_skia::Paint::default() };
+        self.shape(Some(&key), bbox, color, |t, _, _| {
+            let (w, h) = (t.w, t.px.len() / t.w.max(1));
+            let Some(mut pm) =
+                tiny_skia::PixmapMut::from_bytes(t.px.as_flattened_mut(), w as u32, h as u32)
+            else {
+                return;
+            };
+            let shift = crate::geom::Transform::translate(-t.ox as f32, -t.oy as f32);
+            let tt = dev.then(&shift).to_skia();
+            match stroke {
+                None => pm.fill_path(sk, &paint, tiny_skia::FillRule::Winding, tt, None),
+                Some(s) => pm.stroke_path(sk, &paint, s, tt, None),
+            }
+        });
+        true
+    }
+}
+
 /// The coverage of the shape `draw` rasterises inside `bbox`.
 fn rasterise(bbox: IRect, draw: impl FnOnce(&mut Target<'_>, IRect, [u8; 4])) -> Mask {
     let (w, h) = (bbox.w as usize, bbox.h as usize);
