@@ -402,8 +402,8 @@ impl Bound {
 /// `None` when there are more than `limit`.
 fn collect_paths_upto(reads: &[Read], limit: usize) -> Option<Vec<Path>> {
     let mut paths = Vec::new();
-    let mut seen_paths: HashSet<&Path> = HashSet::new();
-    let mut seen_lets: HashSet<*const Let> = HashSet::new();
+    let mut seen_paths: Seen<&Path> = Seen::default();
+    let mut seen_lets: Seen<*const Let> = Seen::default();
     let mut stack: Vec<(&[Read], usize)> = vec![(reads, 0)];
     while let Some((list, i)) = stack.pop() {
         let Some(r) = list.get(i) else { continue };
@@ -439,18 +439,46 @@ fn collect_paths(reads: &[Read]) -> Vec<Path> {
     collect_paths_upto(reads, usize::MAX).unwrap_or_default()
 }
 
+/// A set that is a short list while small (most expressions read a path or two: no hashing,
+/// no allocation until the second element) and a hash set past [`Seen::LIST`] elements.
+struct Seen<T> {
+    list: Vec<T>,
+    set: HashSet<T>,
+}
+
+impl<T> Default for Seen<T> {
+    fn default() -> Seen<T> {
+        Seen { list: Vec::new(), set: HashSet::new() }
+    }
+}
+
+impl<T: Eq + std::hash::Hash + Copy> Seen<T> {
+    const LIST: usize = 16;
+    /// True when `x` was not in the set yet.
+    fn insert(&mut self, x: T) -> bool {
+        if self.set.is_empty() {
+            if self.list.contains(&x) {
+                return false;
+            }
+            if self.list.len() < Self::LIST {
+                self.list.push(x);
+                return true;
+            }
+            self.set.extend(self.list.drain(..));
+        }
+        self.set.insert(x)
+    }
+}
+
 impl Expr {
     /// The paths and `let`s this expression names itself (not through the `let`s), each
     /// once, in order of appearance.
     pub fn reads(&self) -> Vec<Read> {
         let mut out = Vec::new();
-        let mut seen_paths: HashSet<Path> = HashSet::new();
-        let mut seen_lets: HashSet<*const Let> = HashSet::new();
+        let mut seen_paths: Seen<&Path> = Seen::default();
+        let mut seen_lets: Seen<*const Let> = Seen::default();
         self.walk(&mut |e| match &e.node {
-            Node::Path(p) if !seen_paths.contains(p) => {
-                seen_paths.insert(p.clone());
-                out.push(Read::Path(p.clone()));
-            }
+            Node::Path(p) if seen_paths.insert(p) => out.push(Read::Path(p.clone())),
             Node::Let(l) if seen_lets.insert(Arc::as_ptr(&l.0)) => out.push(Read::Let(l.clone())),
             _ => {}
         });
@@ -588,7 +616,7 @@ impl Program {
 impl Expr {
     /// Calls `f` on this node and every node below it. A `let` use is one node: its value
     /// is walked once, with the program's `let`s ([`Program::visit`]).
-    pub fn walk(&self, f: &mut dyn FnMut(&Expr)) {
+    pub fn walk<'a>(&'a self, f: &mut dyn FnMut(&'a Expr)) {
         f(self);
         match &self.node {
             Node::RangeEnd { range, .. } => range.walk(f),
