@@ -180,15 +180,26 @@ fn copy_frame(frame: &Pixmap, buffer: &mut [u32], stride: usize, part: IRect) {
     let (px, _) = frame.data().as_chunks::<4>();
     for y in part.y..part.bottom() {
         let row = &mut buffer[y as usize * stride..][part.x as usize..part.right() as usize];
-        row.fill(0);
-        if y < inside.y || y >= inside.bottom() {
+        if inside.is_empty() || y < inside.y || y >= inside.bottom() {
+            row.fill(0);
             continue;
         }
+        // Each word written once: black beside the frame, the frame's pixels inside it.
+        let (left, rest) = row.split_at_mut((inside.x - part.x) as usize);
+        let (dst, right) = rest.split_at_mut(inside.w as usize);
+        left.fill(0);
+        right.fill(0);
         let src = &px[y as usize * fw + inside.x as usize..][..inside.w as usize];
-        let dst = &mut row[(inside.x - part.x) as usize..][..inside.w as usize];
-        for (d, [r, g, b, _]) in dst.iter_mut().zip(src) {
-            *d = ((*r as u32) << 16) | ((*g as u32) << 8) | *b as u32;
-        }
+        to_0rgb(dst, src);
+    }
+}
+
+/// Premultiplied RGBA8 over black is its colour: `0RGB` words, the red and blue bytes
+/// swapped within each little-endian word (lane arithmetic the compiler vectorises).
+fn to_0rgb(dst: &mut [u32], src: &[[u8; 4]]) {
+    for (d, p) in dst.iter_mut().zip(src) {
+        let v = u32::from_le_bytes(*p);
+        *d = ((v & 0xff) << 16) | (v & 0xff00) | ((v >> 16) & 0xff);
     }
 }
 
