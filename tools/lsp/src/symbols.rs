@@ -217,12 +217,8 @@ pub fn semantic_tokens(index: &Index, path: &str) -> Vec<SemanticToken> {
             }
             raw.push((start, i, type_index(SemanticTokenType::NUMBER)));
         } else if c.is_ascii_alphabetic() || c == b'_' {
-            while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_' || b[i] == b'-') {
+            while i < b.len() && (b[i].is_ascii_alphanumeric() || b[i] == b'_') {
                 i += 1;
-            }
-            // `bottom-right` is one word; `a-b` is not, but a name never ends in `-`.
-            while i > start && b[i - 1] == b'-' {
-                i -= 1;
             }
             let word = &text[start..i];
             let after_dot = start > 0 && b[start - 1] == b'.';
