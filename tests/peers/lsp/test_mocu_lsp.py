@@ -53,6 +53,9 @@ watch slow {
   when fast for 2s
   then show hud
 }
+bind gamepad {
+  button south -> call usv.stop()
+}
 """
 
 
@@ -184,6 +187,14 @@ async def test_completion_inside_a_widget_offers_its_parameters(client: Language
     assert "Dial" in labels and "let" in labels and "usv" in labels
 
 
+async def test_completion_in_a_binding_offers_the_devices_inputs(client: LanguageClient, project):
+    uri = open_layout(client, project / "hud.mocu")
+    line, c = line_col(12, "south")
+    labels = await completion_labels(client, uri, line, c)
+    assert {"south", "east", "left_bumper"} <= set(labels)
+    assert labels["south"].detail == "gamepad button"
+
+
 async def test_hover_shows_a_components_documentation(client: LanguageClient, project):
     uri = open_layout(client, project / "hud.mocu")
     line, c = line_col(5, "Dial")
@@ -234,7 +245,7 @@ async def test_references_list_every_use_of_a_let(client: LanguageClient, projec
     refs = await client.text_document_references_async(
         types.ReferenceParams(**(at(uri, line, c)), context=types.ReferenceContext(include_declaration=True))
     )
-    assert sorted(r.range.start.line for r in refs) == [1, 2, 5]
+    assert sorted(r.range.start.line for r in refs) == [1, 2, 5, 12]
 
 
 async def test_rename_of_a_window_edits_its_definition_and_every_use(client: LanguageClient, project):
@@ -261,7 +272,7 @@ async def test_document_symbols_outline_lets_windows_widgets_and_watches(client:
         types.DocumentSymbolParams(text_document=types.TextDocumentIdentifier(uri=uri))
     )
     names = [s.name for s in syms]
-    assert names == ['use "stdlib/gauges.mocu"', "usv", "fast", "hud", "in hud", "slow"]
+    assert names == ['use "stdlib/gauges.mocu"', "usv", "fast", "hud", "in hud", "slow", "bind gamepad"]
     assert [w.name for w in syms[4].children] == ["speed"]
 
 

@@ -94,6 +94,9 @@ pub fn complete(
             })
             .collect();
     }
+    if let Some(inputs) = inputs_at(index, before, word_start, offset) {
+        return inputs;
+    }
     let mut out = Vec::new();
     if let Some((component, written)) = widget_at(index, offset) {
         out.extend(params_of(index, &component, &written));
@@ -140,6 +143,32 @@ fn item(
         }),
         ..CompletionItem::default()
     }
+}
+
+/// In a `bind DEVICE { … }` block right after a binding kind (`button `, `axis `, `key `):
+/// the device's inputs of that kind.
+fn inputs_at(
+    index: &Index,
+    before: &str,
+    word_start: usize,
+    offset: usize,
+) -> Option<Vec<CompletionItem>> {
+    let o = offset as u32;
+    let device = index.modules.first()?.ast.items.iter().find_map(|i| match i {
+        Item::Bind(b) if b.span.start < o && o < b.span.end => Some(b.device.name.clone()),
+        _ => None,
+    })?;
+    let kind = before[..word_start].trim_end().rsplit(|c: char| c.is_whitespace()).next()?;
+    let (_, kinds) = builtins::DEVICES.iter().find(|(d, _)| *d == device)?;
+    let (_, names) = kinds.iter().find(|(k, _)| *k == kind)?;
+    let names: &[&str] = if kind == "key" { builtins::NAMED_KEYS } else { names };
+    let detail = format!("{device} {kind}");
+    Some(
+        names
+            .iter()
+            .map(|n| item(n, CompletionItemKind::ENUM_MEMBER, Some(detail.clone()), None))
+            .collect(),
+    )
 }
 
 /// The widget of the document whose braces hold `offset`: its component and the parameters
