@@ -379,6 +379,8 @@ impl Shared {
             .and_then(|op| self.ds.try_get(op, PropName::new("selected")))
             .and_then(|v| v.as_guid());
         let mut symbols = Vec::new();
+        // Labels already placed: a label that would overlap one moves down a line.
+        let mut labels: Vec<Rect> = Vec::new();
         for v in &vehicles {
             let p = to_screen(v.pos.0, v.pos.1);
             symbols.push((v.guid, v.name.clone(), p));
@@ -398,7 +400,17 @@ impl Shared {
             let style = TextStyle::new(12.0 * u, Color::rgb(0xe8, 0xf0, 0xf8))
                 .align(Align::Left)
                 .baseline(Baseline::Middle);
-            c.draw_text(&v.name, Point::new(p.x + 14.0 * u, p.y), &style);
+            let tw = mocu_display::measure_text(&v.name, 12.0 * u, false).width;
+            let line = 15.0 * u;
+            let mut at = Rect::new(p.x + 14.0 * u, p.y - line / 2.0, tw, line);
+            for _ in 0..labels.len() {
+                match labels.iter().find(|l| l.intersects(&at)) {
+                    Some(l) => at.y = l.y + l.h,
+                    None => break,
+                }
+            }
+            labels.push(at);
+            c.draw_text(&v.name, Point::new(at.x, at.y + line / 2.0), &style);
         }
         self.state.lock().symbols.insert(g, symbols);
         c.stroke_rounded_rect(

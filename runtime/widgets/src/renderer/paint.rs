@@ -115,7 +115,10 @@ impl Shared {
             && (props.get("stale").and_then(Value::as_bool) == Some(true)
                 || props.get("aged").and_then(Value::as_bool) == Some(true))
         {
-            stale_veil(c, b, drawn.unwrap_or(Rect::new(0.0, 0.0, b.w, b.h)), radius);
+            // The tag grows with a design's scale, like the widget it marks.
+            let s = props.get("scale").and_then(Value::as_f64).map_or(1.0, |s| s.max(1.0));
+            let area = drawn.unwrap_or(Rect::new(0.0, 0.0, b.w, b.h));
+            stale_veil(c, b, area, radius, s as f32);
         }
         let state = props.get("feedback").and_then(Value::as_str).unwrap_or("");
         let age = feedback_at.map_or(Duration::MAX, |t| t.elapsed());
@@ -163,7 +166,7 @@ impl Shared {
 /// The stale veil over everything a widget drew (`drawn`, widget-local; a round widget
 /// that drew nothing outside its box gets a round veil) and the STALE tag in its middle,
 /// inside the veil: it never covers a neighbour.
-fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32) {
+fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32, s: f32) {
     let veil = Color::rgba(8, 10, 14, 170);
     let inside = drawn.x >= -0.5
         && drawn.y >= -0.5
@@ -178,10 +181,10 @@ fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32) {
     );
     // Where it hides the least: a short, wide widget's label (left), else high in the middle
     // (the value read-outs sit low or right).
-    let size = if area.h >= 16.0 { 12.0 } else { (area.h - 2.0).max(8.0) };
+    let size = if area.h >= 16.0 * s { 12.0 * s } else { (area.h - 2.0).max(8.0) };
     let tw = mocu_display::measure_text("STALE", size, true).width;
-    let mid = if area.h < 48.0 && area.w >= tw + 12.0 {
-        Point::new(area.x + 6.0 + tw / 2.0, area.y + area.h / 2.0)
+    let mid = if area.h < 48.0 * s && area.w >= tw + 12.0 * s {
+        Point::new(area.x + 6.0 * s + tw / 2.0, area.y + area.h / 2.0)
     } else {
         Point::new(area.x + area.w / 2.0, area.y + (area.h * 0.25).max(size))
     };
