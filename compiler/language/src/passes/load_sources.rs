@@ -34,8 +34,12 @@ fn load(
     // The files being loaded, each with the span of its `use` being followed.
     stack: &mut Vec<(usize, Option<Span>)>,
 ) -> usize {
-    let file = sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
-    let ast = parser::parse(file, &text, diags);
+    // The text is moved into the source map (not copied) and parsed from there.
+    let file = match sources.find(path) {
+        Some(f) => f,
+        None => sources.add(path.to_string(), text),
+    };
+    let ast = parser::parse(file, &sources.get(file).text, diags);
     let id = modules.len();
     let uses: Vec<_> = ast
         .items
