@@ -38,10 +38,16 @@ pub fn run(player: &mut Player, args: &ReplayArgs, screen: (u32, u32)) -> u8 {
             (args.from.map_or(start, |f| player.at_secs(f)), stop, args.frames.unwrap_or(u64::MAX))
         }
     };
+    let sought = std::time::Instant::now();
     if let Err(e) = player.seek(begin) {
         eprintln!("mocu replay: {e}");
         return 2;
     }
+    eprintln!(
+        "mocu: at {:.3} s (seek: {:.1} ms)",
+        player.trial_secs(),
+        sought.elapsed().as_secs_f64() * 1e3
+    );
     let mut n = 0;
     while n < frames && player.now_ns() < last {
         let next = player.now_ns().saturating_add(frame_ns).min(last);

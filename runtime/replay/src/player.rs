@@ -8,7 +8,7 @@ use crate::message::{ObjectChange, PropertyChange, Snapshot};
 use crate::topics::{OBJECT, PROPERTY, SNAPSHOT};
 use crate::world::World;
 use mocu_dataserver::{Clock, DataServer, ManualClock};
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant, UNIX_EPOCH};
@@ -123,9 +123,12 @@ impl Player {
             None => true,
             Some(k) => m.log_time > k.log_time || (m.sequence.wrapping_sub(k.sequence) as i32) > 0,
         };
-        for m in self.rec.messages(from, to, &[OBJECT, PROPERTY])? {
-            if after(&m) {
-                self.apply(&m);
+        let changes: Vec<RawMessage> =
+            self.rec.messages(from, to, &[OBJECT, PROPERTY])?.into_iter().filter(after).collect();
+        for c in coalesce(&changes) {
+            match c {
+                Change::Object(c) => self.world.apply_object(&c),
+                Change::Property(c) => self.world.apply_property(&c),
             }
         }
         self.cursor = to;
@@ -202,4 +205,54 @@ impl Player {
             _ => {}
         }
     }
+}
+
+/// A parsed change.
+enum Change {
+    Object(ObjectChange),
+    Property(PropertyChange),
+}
+
+/// The changes of a seek, with the writes of one property between two changes of the world's
+/// shape folded into the last of them: a seek lands on the same world, and the server (and
+/// everyone subscribed to it) sees one write per property instead of every step between.
+fn coalesce(msgs: &[RawMessage]) -> Vec<Change> {
+    let mut out: Vec<Change> = Vec::with_capacity(msgs.len().min(1 << 16));
+    let mut last: HashMap<(u64, String), usize> = HashMap::new();
+    for m in msgs {
+        match &*m.topic {
+            OBJECT => {
+                if let Some(c) = ObjectChange::parse(&m.data) {
+                    last.clear();
+                    out.push(Change::Object(c));
+                }
+            }
+            PROPERTY => match PropertyChange::parse(&m.data) {
+                Some(PropertyChange::Set { object, name, value }) => {
+                    let key = (object, name);
+                    match last.get(&key) {
+                        Some(&i) => {
+                            out[i] =
+                                Change::Property(PropertyChange::Set { object, name: key.1, value })
+                        }
+                        None => {
+                            out.push(Change::Property(PropertyChange::Set {
+                                object,
+                                name: key.1.clone(),
+                                value,
+                            }));
+                            last.insert(key, out.len() - 1);
+                        }
+                    }
+                }
+                Some(c) => {
+                    last.clear();
+                    out.push(Change::Property(c));
+                }
+                None => {}
+            },
+            _ => {}
+        }
+    }
+    out
 }
