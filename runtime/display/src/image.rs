@@ -46,11 +46,62 @@ impl Image {
             .map_err(|e| e.to_string())
     }
 
+    /// This image resampled to `width`×`height` as a draw at that size samples it
+    /// (bilinear), drawn once: a video frame scaled to its window when it arrives, off
+    /// the display's thread, is then drawn pixel for pixel (`skia/resample.rs` copies
+    /// it). The image itself when the size is its own; `None` for a zero side.
+    pub fn scaled(&self, width: u32, height: u32) -> Option<Image> {
+        if (width, height) == (self.width(), self.height()) {
+            return Some(self.clone());
+        }
+        let (w, h) = (width as f32, height as f32);
+        let pixmap = tiny_skia::Pixmap::new(width, height)?;
+        let mut c = crate::SkiaCanvas::new(pixmap, (0, 0), crate::Size::new(w, h));
+        crate::Canvas::draw_image(
+            &mut c,
+            self,
+            crate::Rect::new(0.0, 0.0, w, h),
+            crate::ImageFit::Stretch,
+            1.0,
+        );
+        Some(Image { pixmap: Arc::new(c.into_pixmap()) })
+    }
+
     pub fn width(&self) -> u32 {
         self.pixmap.width()
     }
 
     pub fn height(&self) -> u32 {
         self.pixmap.height()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Canvas, ImageFit, Rect, Size, SkiaCanvas};
+
+    /// Scaling once and drawing the result pixel for pixel shows what drawing the image at
+    /// that size shows.
+    #[test]
+    fn a_scaled_image_drawn_one_to_one_matches_the_image_drawn_scaled() {
+        let mut v = Vec::new();
+        for i in 0..64u32 * 48 {
+            v.extend([(i * 37 % 256) as u8, (i * 91 % 256) as u8, (i * 53 % 256) as u8, 255]);
+        }
+        let img = Image::from_rgba8(64, 48, v).unwrap();
+        let (w, h) = (200u32, 120u32);
+        let draw = |img: &Image, dst: Rect| {
+            let pm = tiny_skia::Pixmap::new(w, h).unwrap();
+            let mut c = SkiaCanvas::new(pm, (0, 0), Size::new(w as f32, h as f32));
+            c.draw_image(img, dst, ImageFit::Stretch, 1.0);
+            c.into_pixmap()
+        };
+        let at = Rect::new(20.0, 6.0, 160.0, 108.0);
+        let direct = draw(&img, at);
+        let once = draw(&img.scaled(160, 108).unwrap(), at);
+        assert!(direct.data() == once.data(), "the same pixels");
+        assert_eq!(img.scaled(64, 48).unwrap().width(), 64);
+        assert!(img.scaled(0, 10).is_none());
     }
 }

@@ -6,7 +6,9 @@
 //!
 //! Each camera is joined once, however many windows show it (`Overflow::DropOldest`, a
 //! queue of 2: the display never lags behind the camera); each frame is turned into an
-//! [`Image`] once, off the frame thread, and every window showing it is invalidated.
+//! [`Image`] once, off the frame thread, scaled there once to where each window showing it
+//! shows it (the display then copies it, no resampling on its thread), and every window
+//! showing it is invalidated.
 //!
 //! A network camera (`root.cameras.<name>`) whose `feeds` property names a camera path
 //! (or is `auto`: the first vehicle's `cameras.drive`) stands in for that camera while it
@@ -21,8 +23,8 @@ use mocu_dataserver::{
     ParamSpec, Subject, SubscriptionId, Topic, Value,
 };
 use mocu_display::{
-    Align, Baseline, Brush, Canvas, Color, Image, ImageFit, PaintArgs, Point, Rect, TextStyle,
-    claim_window, invalidate,
+    Align, Baseline, Brush, Canvas, Color, Image, ImageFit, PaintArgs, Point, Rect, Size,
+    TextStyle, claim_window, fit_rect, invalidate,
 };
 use mocu_value::PropName;
 use parking_lot::Mutex;
@@ -99,6 +101,9 @@ struct Win {
     camera: Option<Guid>,
     status: Status,
     shown: Option<Shown>,
+    /// The camera's latest frame scaled once to where it lands in the window (its frame
+    /// number, the image): painted pixel for pixel, no resampling on the display's thread.
+    scaled: Option<(i64, Image)>,
 }
 
 struct Cam {
@@ -214,6 +219,7 @@ impl Shared {
                         camera: None,
                         status: Status::NoVideo,
                         shown: None,
+                        scaled: None,
                     },
                 );
                 let weak = Arc::downgrade(self);
@@ -366,8 +372,15 @@ impl Shared {
             Image::from_rgb8(f.width, f.height, &f.pixels)
         };
         let Some(image) = image else { return };
-        let latest =
-            Latest { image, frame: f.frame, arrival_us: f.arrival_us, received: Instant::now() };
+        let frame = f.frame;
+        let showing: Vec<Guid> = {
+            let st = self.state.lock();
+            st.windows.iter().filter(|(_, w)| w.camera == Some(camera)).map(|(g, _)| *g).collect()
+        };
+        // Scaled here, once per window size, rather than resampled in each paint.
+        let scaled: Vec<(Guid, Option<Image>)> =
+            showing.iter().map(|g| (*g, self.scale_for(*g, &image))).collect();
+        let latest = Latest { image, frame, arrival_us: f.arrival_us, received: Instant::now() };
         let windows: Vec<Guid> = {
             let mut st = self.state.lock();
             let Some(cam) = st.cameras.get_mut(&camera) else { return };
@@ -376,6 +389,8 @@ impl Shared {
             for (g, w) in st.windows.iter_mut() {
                 if w.camera == Some(camera) {
                     w.status = Status::Live;
+                    let img = scaled.iter().find(|(x, _)| x == g).and_then(|(_, i)| i.clone());
+                    w.scaled = img.map(|i| (frame, i));
                     ws.push(*g);
                 }
             }
@@ -386,10 +401,19 @@ impl Shared {
         }
     }
 
+    /// `image` scaled to the rectangle it is shown in within window `g` (kept whole, centred:
+    /// [`picture_at`]) when that rectangle has whole-pixel sides and corner.
+    fn scale_for(&self, g: Guid, image: &Image) -> Option<Image> {
+        let n = |k: &str| self.ds.try_get(g, PropName::new(k)).and_then(|v| v.as_f64());
+        let (w, h) = (n("w")? as f32, n("h")? as f32);
+        let r = picture_at(image, Rect::new(0.0, 0.0, w, h))?;
+        image.scaled(r.w as u32, r.h as u32)
+    }
+
     fn paint(&self, window: Guid, c: &mut dyn Canvas, _a: &PaintArgs) {
         let size = c.size();
         let full = Rect::new(0.0, 0.0, size.w, size.h);
-        let (latest, status, source) = {
+        let (latest, status, source, scaled) = {
             let mut st = self.state.lock();
             let Some(w) = st.windows.get(&window) else { return };
             let (cam, source) = (w.camera, w.source.clone());
@@ -421,11 +445,21 @@ impl Shared {
                     cam.latency_ms = Some((now_us() - t) as f64 / 1000.0);
                 }
             }
-            (latest, status, source)
+            let scaled = st.windows.get(&window).and_then(|w| w.scaled.clone());
+            (latest, status, source, scaled)
         };
         c.fill_rect(full, BLACK);
         if let (Some(l), true) = (&latest, status != Status::NoVideo) {
-            c.draw_image(&l.image, full, ImageFit::Contain, 1.0);
+            // The frame scaled when it arrived, when it is this frame at this size.
+            let at = picture_at(&l.image, full);
+            let ready = scaled.filter(|(f, img)| {
+                *f == l.frame
+                    && at.is_some_and(|r| (r.w, r.h) == (img.width() as f32, img.height() as f32))
+            });
+            match (ready, at) {
+                (Some((_, img)), Some(r)) => c.draw_image(&img, r, ImageFit::Stretch, 1.0),
+                _ => c.draw_image(&l.image, full, ImageFit::Contain, 1.0),
+            }
         }
         match status {
             Status::Live => {}
@@ -446,6 +480,16 @@ impl Shared {
             }
         }
     }
+}
+
+/// Where `image` is shown in `full` (kept whole, centred: `ImageFit::Contain`), when that
+/// rectangle lies on whole pixels — where a copy scaled to its size is drawn pixel for
+/// pixel.
+fn picture_at(image: &Image, full: Rect) -> Option<Rect> {
+    let size = Size::new(image.width() as f32, image.height() as f32);
+    let r = fit_rect(size, full, ImageFit::Contain);
+    let whole = |v: f32| v.fract() == 0.0;
+    (r.w >= 1.0 && r.h >= 1.0 && [r.x, r.y, r.w, r.h].into_iter().all(whole)).then_some(r)
 }
 
 /// A label in the top-left corner of the picture.

@@ -90,6 +90,11 @@ pub(super) fn draw(
     if area.is_empty() || sw == 0 || sh == 0 || src.px.len() < sw * sh || opacity == 0 {
         return;
     }
+    if let (Some(dx), Some(dy)) = (x.shift(), y.shift())
+        && copy_shifted(dst, dst_w, origin, area, src, (dx, dy), opacity)
+    {
+        return;
+    }
     let n = area.w as usize;
     let cols = x.taps(area.x + origin.0, n, src.width);
     let rows = y.taps(area.y + origin.1, area.h as usize, src.height);
@@ -125,6 +130,43 @@ pub(super) fn draw(
             pixel::over_coverage(&mut row[i], out[i], k);
         }
     }
+}
+
+impl Axis {
+    /// `Some(offset)` when the image lands pixel for pixel (scale 1, whole-pixel offset
+    /// and painted range): every window pixel is one source pixel, wholly covered.
+    fn shift(&self) -> Option<i64> {
+        let whole = |v: f64| v.fract() == 0.0 && v.abs() < 1e9;
+        (self.scale == 1.0 && whole(self.offset) && whole(self.lo) && whole(self.hi))
+            .then_some(self.offset as i64)
+    }
+}
+
+/// The image placed pixel for pixel at window offset `shift`: its rows blended straight
+/// into the destination (an opaque one is copied), no resampling. `false` (nothing drawn)
+/// when `area` reaches beyond the image, which the general path pads.
+fn copy_shifted(
+    dst: &mut [[u8; 4]],
+    dst_w: usize,
+    origin: (i32, i32),
+    area: IRect,
+    src: &Source,
+    shift: (i64, i64),
+    opacity: u8,
+) -> bool {
+    let sx = (area.x + origin.0) as i64 - shift.0;
+    let sy = (area.y + origin.1) as i64 - shift.1;
+    let (n, rows) = (area.w as i64, area.h as i64);
+    if sx < 0 || sy < 0 || sx + n > src.width as i64 || sy + rows > src.height as i64 {
+        return false;
+    }
+    let sw = src.width as usize;
+    for k in 0..rows as usize {
+        let from = &src.px[(sy as usize + k) * sw + sx as usize..][..n as usize];
+        let row = &mut dst[(area.y as usize + k) * dst_w + area.x as usize..][..n as usize];
+        pixel::blend_row(row, from, opacity);
+    }
+    true
 }
 
 /// The cache slot for source row `want`: the one holding it, else one not holding
@@ -344,6 +386,15 @@ mod tests {
                 id,
                 None,
                 1.0,
+            ),
+            case(
+                "one to one at half opacity, clipped",
+                (20, 10),
+                Rect::new(4.0, 5.0, 20.0, 10.0),
+                ImageFit::Stretch,
+                id,
+                Some(Rect::new(6.0, 6.0, 12.0, 6.0)),
+                0.5,
             ),
             case(
                 "fractional edges",
