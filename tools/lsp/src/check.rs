@@ -35,13 +35,22 @@ pub struct Analysis {
     pub elapsed: Duration,
 }
 
+/// What a check leaves behind: its program and sources, handed to the caller to drop after
+/// publishing (freeing the program of a 10,000-line layout takes a while).
+pub struct Leftovers {
+    _bundle: Option<mocu_language::Bundle>,
+    _sources: SourceMap,
+}
+
 /// Checks `path` (its text from `loader`) as `mocu check PATH` does.
-pub fn analyse(path: &str, version: i32, loader: &OverlayLoader) -> Analysis {
+pub fn analyse(path: &str, version: i32, loader: &OverlayLoader) -> (Analysis, Leftovers) {
     let started = Instant::now();
     let mut sources = SourceMap::new();
     let mut diags = Diagnostics::new();
     let mut out = Analysis { version, ..Analysis::default() };
-    let Ok(text) = mocu_language::SourceLoader::read(loader, path) else { return out };
+    let Ok(text) = mocu_language::SourceLoader::read(loader, path) else {
+        return (out, Leftovers { _bundle: None, _sources: sources });
+    };
     let bundle = if mocu_language::file_kind(path, &text) == FileKind::Layout {
         let project = mocu_language::project_of(path, None, loader, &mut sources, &mut diags);
         if let Some(p) = &project {
@@ -75,7 +84,7 @@ pub fn analyse(path: &str, version: i32, loader: &OverlayLoader) -> Analysis {
         }
     }
     out.elapsed = started.elapsed();
-    out
+    (out, Leftovers { _bundle: bundle, _sources: sources })
 }
 
 /// One diagnostic as LSP shows it: the message, then its label and help as `mocu check`
@@ -159,7 +168,7 @@ fn worker(jobs: &Receiver<Job>, out: &Sender<Message>, store: &Analyses) {
         let checked = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             analyse(&job.path, job.version, &job.loader)
         }));
-        let Ok(analysis) = checked else { continue };
+        let Ok((analysis, leftovers)) = checked else { continue };
         // A newer edit of this document arrived while checking: this result is stale.
         take_newest(jobs, &mut pending);
         if pending.iter().any(|j| j.path == job.path) {
@@ -178,6 +187,7 @@ fn worker(jobs: &Receiver<Job>, out: &Sender<Message>, store: &Analyses) {
             publish(out, f, list.clone(), version);
         }
         shown.insert(job.path.clone(), files);
+        drop(leftovers);
         if let Ok(mut s) = store.lock() {
             s.insert(job.path, Arc::new(analysis));
         }
@@ -245,7 +255,7 @@ mod tests {
 
     #[test]
     fn a_diagnostic_carries_mocu_checks_code_range_and_message() {
-        let a = analyse("/virtual/a.mocu", 1, &job(1, "let a = 1\nlet b = a + c\n").loader);
+        let (a, _) = analyse("/virtual/a.mocu", 1, &job(1, "let a = 1\nlet b = a + c\n").loader);
         let d = &a.by_file["/virtual/a.mocu"][0];
         assert_eq!(d.code, Some(NumberOrString::String("E0204".into())));
         assert_eq!((d.range.start.line, d.range.start.character), (1, 12));
