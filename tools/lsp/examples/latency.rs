@@ -5,7 +5,8 @@
 //! `publishDiagnostics` of its version. A burst of edits sent at once is timed to the
 //! diagnostics of its last version (the stale ones in between are dropped, not checked).
 //!
-//! `cargo run --release -p mocu-lsp --example latency [LINES]` (default 10000).
+//! `cargo run --release -p mocu-lsp --example latency [LINES]` (default 10000); figures:
+//! docs/editors.md ("Latency").
 
 #[path = "../../../benches/common/layout_corpus.rs"]
 mod layout_corpus;
