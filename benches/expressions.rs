@@ -21,6 +21,16 @@
 //! so that all share the same machine noise, and prints the fastest block's ns/eval and the
 //! ratios (stderr); the fastest block is the least disturbed on a shared machine.
 //! `cargo bench --bench expressions`; under `cargo test --benches` everything runs once.
+//!
+//! `shared_let/*` (issue 13): a `let` read by many widgets is compiled and evaluated once.
+//! `load_100_labels_of_one_let_chain`: `Layout::load` (JIT) of 100 labels each showing the
+//! end of a chain of 2,000 `let`s, then one change of the speed they all follow; baseline
+//! `baseline_one_label_of_the_chain_99_of_the_path`: the same chain shown by one label, the
+//! other 99 showing the speed itself. Measured (release, 2-core shared machine, same run):
+//! ours 540–690 ms, baseline 180–240 ms: the chain is compiled once, as the baseline's is
+//! (its own function compiles slower in Cranelift than inside label 0's). Copied into each
+//! label as before, the same load took 6.0 s with the JIT (0.50 s with the interpreter,
+//! against 8 ms shared) and 601,607 IR nodes against 7,607.
 
 use criterion::{Criterion, criterion_group};
 use evalexpr::{
@@ -264,13 +274,71 @@ fn bench(c: &mut Criterion) {
     }
 }
 
+/// 100 labels after a chain of 2,000 `let`s from the speed: label 0 shows the chain's end,
+/// the others the chain's end too (`all`) or the speed itself.
+fn let_layout(all: bool) -> String {
+    let n = 2_000;
+    let mut text =
+        String::from("use \"stdlib/gauges.mocu\"\nlet a0 = root.vehicles.usv1.nav.speed\n");
+    for i in 1..=n {
+        text += &format!("let a{i} = a{} + 1\n", i - 1);
+    }
+    text += "window hud { layer 1  rect 0 0 100 100 }\nin hud {\n";
+    for w in 0..100 {
+        let shown =
+            if all || w == 0 { format!("a{n}") } else { "root.vehicles.usv1.nav.speed".into() };
+        text += &format!("  w{w}: Label {{ at 0 0  text \"{{{shown}}}\" }}\n");
+    }
+    text + "}\n"
+}
+
+fn checked(text: &str) -> mocu_language::Program {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lets.mocu");
+    std::fs::write(&path, text).unwrap();
+    match mocu_language::load_target(&path) {
+        Ok((bundle, _)) => bundle.layouts.into_iter().next().unwrap().program,
+        Err(e) => panic!("the generated layout does not check:\n{e}"),
+    }
+}
+
+/// Loads `program`, sets the speed once and lets the layout settle.
+fn load_and_change(program: &mocu_language::Program) {
+    use mocu_dataserver::{DataServer, Guid, ObjectInfo, Value};
+    let ds = DataServer::default();
+    let vs = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+    let v = ds.create_object(vs, ObjectInfo::new("usv1", "usv")).unwrap();
+    let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+    let config = mocu_layout::LayoutConfig {
+        tick: Duration::from_millis(1),
+        alerts_to_terminal: false,
+        ..Default::default()
+    };
+    let sink = Arc::new(mocu_layout::NullSink);
+    let layout = mocu_layout::Layout::load(&ds, program, config, sink).unwrap();
+    ds.set(nav, "speed", Value::Float(2.5)).unwrap();
+    layout.settle();
+    black_box(layout.stats());
+}
+
+fn bench_shared_let(c: &mut Criterion) {
+    let (ours, baseline) = (checked(&let_layout(true)), checked(&let_layout(false)));
+    let mut g = c.benchmark_group("shared_let");
+    g.sample_size(10);
+    g.bench_function("baseline_one_label_of_the_chain_99_of_the_path", |b| {
+        b.iter(|| load_and_change(&baseline))
+    });
+    g.bench_function("load_100_labels_of_one_let_chain", |b| b.iter(|| load_and_change(&ours)));
+    g.finish();
+}
+
 criterion_group! {
     name = groups;
     config = Criterion::default()
         .warm_up_time(Duration::from_millis(300))
         .measurement_time(Duration::from_millis(1200))
         .sample_size(50);
-    targets = bench
+    targets = bench, bench_shared_let
 }
 
 // ----- summary: interleaved Instant loops, one table ----------------------------------
