@@ -1,5 +1,6 @@
-//! Small solid fills and strokes are drawn through cached coverage masks: the first time
-//! and from the cache they give tiny-skia's own pixels within a rounding step. The
+//! Small solid fills and strokes are drawn through coverage masks, cached from their
+//! second drawing: the first time, the second and from the cache they give tiny-skia's
+//! own pixels within a rounding step. The
 //! reference is the same drawing in a gradient whose stops are one colour, which
 //! tiny-skia rasterises and blends directly.
 
@@ -52,7 +53,7 @@ fn cached_fills_and_strokes_are_tiny_skias_pixels_within_a_rounding_step() {
     scene(&mut reference, &one_colour_gradient);
     let reference = reference.into_pixmap();
     assert!(reference.data().iter().any(|b| *b != 0), "the scene draws something");
-    for pass in ["rasterised", "from the cache"] {
+    for pass in ["drawn once", "drawn again (kept)", "from the cache"] {
         let mut cached = canvas();
         scene(&mut cached, &solid);
         let cached = cached.into_pixmap();

@@ -14,7 +14,7 @@ use crate::geom::IRect;
 use crate::pixel;
 use crate::tiles::Tiles;
 use parking_lot::Mutex;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::sync::{Arc, OnceLock};
 
 /// Masks kept (bytes, all masks together) before the cache is emptied.
@@ -59,6 +59,36 @@ struct Mask {
 struct Cache {
     masks: HashMap<Box<[u32]>, Arc<Mask>>,
     bytes: usize,
+    /// Hashes of the keys drawn once and not cached: a shape is cached the second time it
+    /// is drawn, so a shape that moves every frame (a needle, a value's arc) is drawn
+    /// directly instead of paying for a mask it never reuses.
+    seen: HashSet<u64>,
+}
+
+/// Keys remembered as seen once, at most (then forgotten all together).
+const SEEN_MAX: usize = 8192;
+
+/// Whether the shape `key` is to be drawn through its mask: it is cached, or was drawn
+/// once before. The first time, it is remembered and drawn directly.
+fn admit(key: &[u32]) -> bool {
+    let mut c = cache().lock();
+    if c.masks.contains_key(key) {
+        return true;
+    }
+    let h = seen_hash(key);
+    if c.seen.contains(&h) {
+        return true;
+    }
+    if c.seen.len() >= SEEN_MAX {
+        c.seen.clear();
+    }
+    c.seen.insert(h);
+    false
+}
+
+fn seen_hash(key: &[u32]) -> u64 {
+    use std::hash::{BuildHasher, BuildHasherDefault};
+    BuildHasherDefault::<std::collections::hash_map::DefaultHasher>::default().hash_one(key)
 }
 
 fn cache() -> &'static Mutex<Cache> {
@@ -70,10 +100,30 @@ impl SkiaCanvas {
     /// Draws a shape in `color`: `draw` rasterises it (drawing a premultiplied colour onto
     /// a target, inside an area of device pixels), `bbox` is every pixel it may touch.
     /// With a `key` (naming the shape exactly) the shape is drawn through its cached
-    /// coverage mask; without one, or when it is large, straight onto the pixmap.
+    /// coverage mask (from the second time it is drawn); without one, or when it is
+    /// large, straight onto the pixmap.
     pub(super) fn shape(
         &mut self,
         key: Option<&[u32]>,
+        bbox: IRect,
+        color: Color,
+        draw: impl FnOnce(&mut Target<'_>, IRect, [u8; 4]),
+    ) {
+        if bbox.intersect(&self.state.clip).is_empty() || color.a == 0 {
+            return;
+        }
+        // Drawn directly the first time: the analytic rasterisers blend their coverage
+        // with the arithmetic a mask's blend uses, so both give the same pixels.
+        let key = key.filter(|k| bbox.area() <= MASK_MAX && admit(k));
+        self.through_mask(key, true, bbox, color, draw)
+    }
+
+    /// [`SkiaCanvas::shape`] once the key is admitted: through the mask of `key` (kept in
+    /// the cache when `keep`), or directly when there is no key.
+    fn through_mask(
+        &mut self,
+        key: Option<&[u32]>,
+        keep: bool,
         bbox: IRect,
         color: Color,
         draw: impl FnOnce(&mut Target<'_>, IRect, [u8; 4]),
@@ -95,6 +145,7 @@ impl SkiaCanvas {
         let found = cache().lock().masks.get(key).cloned();
         let mask = match found {
             Some(m) if m.bbox == bbox => m,
+            _ if !keep => Arc::new(rasterise(bbox, draw)),
             _ => {
                 let m = Arc::new(rasterise(bbox, draw));
                 let mut c = cache().lock();
@@ -193,8 +244,14 @@ impl SkiaCanvas {
                 key.extend([p.x.to_bits(), p.y.to_bits()]);
             }
         }
+        if color.a == 0 {
+            return true;
+        }
+        // Always through a mask (the same pixels cached or not); kept from the second time.
+        let keep = admit(&key);
         let paint = tiny_skia::Paint { anti_alias: true, ..tiny_skia::Paint::default() };
-        self.shape(Some(&key), bbox, color, |t, _, _| {
+        // Through a mask: never drawn directly by this black-ink closure.
+        self.through_mask(Some(&key), keep, bbox, color, |t, _, _| {
             let (w, h) = (t.w, t.px.len() / t.w.max(1));
             let Some(mut pm) =
                 tiny_skia::PixmapMut::from_bytes(t.px.as_flattened_mut(), w as u32, h as u32)
