@@ -2,11 +2,45 @@
 //! N times at the display rate (the command-line contract: N frames in real time); without
 //! it the loop sleeps until the world model changes what the display shows, a module
 //! reports, or a stop is asked for, and draws at most one frame per display period.
+//!
+//! A run with `--frames N` is clocked by its frames ([`Stepped`]): the DataServer's clock
+//! moves one display period per frame, its timers firing one at a time in deadline order
+//! (`DataServer::advance_settled`), so a seeded simulator under an input script ends in the
+//! same state every run, whatever the machine's load.
 
 use crossbeam_channel::{Receiver, Sender, bounded, never, select};
+use mocu_dataserver::{Clock, DataServer, ManualClock};
 use mocu_display::{ChangeWaiter, Display, FrameStats};
 use mocu_host::HostEvent;
 use std::time::{Duration, Instant};
+
+/// A run's clock moved by its frames: the DataServer built on `clock` does not see the
+/// system's time pass, only whole display periods, each settled in order.
+#[derive(Clone)]
+pub struct Stepped {
+    pub ds: DataServer,
+    pub clock: ManualClock,
+}
+
+impl Default for Stepped {
+    fn default() -> Stepped {
+        Stepped::new()
+    }
+}
+
+impl Stepped {
+    /// A DataServer on a clock of its own, standing still until [`Stepped::advance`].
+    pub fn new() -> Stepped {
+        let clock = ManualClock::new();
+        let ds = DataServer::with_clock(Default::default(), std::sync::Arc::new(clock.clone()));
+        Stepped { ds, clock }
+    }
+
+    /// Moves the run's clock `d` forward, firing what falls due one job at a time.
+    pub fn advance(&self, d: Duration) {
+        self.ds.advance_settled(&self.clock, self.clock.now() + d);
+    }
+}
 
 /// How long the loop runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -34,6 +68,8 @@ pub struct Inputs<'a> {
     pub stop: &'a Receiver<()>,
     /// The module host's reports.
     pub events: &'a Receiver<HostEvent>,
+    /// The run's clock, when its frames move it (`--frames N` headless).
+    pub stepped: Option<&'a Stepped>,
 }
 
 /// Runs frames on `display` until `pace` is done or a stop is asked for. `on_event` gets
@@ -49,7 +85,11 @@ pub fn run(
     let mut c = LoopCounters::default();
     let mut events = inputs.events.clone();
     let stop = inputs.stop;
+    let stepped = inputs.stepped;
     let mut tick = |display: &mut Display, c: &mut LoopCounters| {
+        if let Some(s) = stepped {
+            s.advance(period);
+        }
         display.tick_animations();
         let st = display.frame();
         c.ticks += 1;
@@ -169,7 +209,7 @@ mod tests {
             .unwrap();
             ready_tx.send(g).unwrap();
             ds2.quiesce(); // the window manager knows the window before the first frame
-            let inputs = Inputs { stop: &stop_rx, events: &ev_rx };
+            let inputs = Inputs { stop: &stop_rx, events: &ev_rx, stepped: None };
             run(
                 &mut d,
                 pace,

@@ -10,8 +10,11 @@ mod build;
 mod check;
 mod fmt;
 mod frames;
+mod golden;
 mod logger;
+mod record;
 mod lsp;
+mod replay;
 mod run;
 mod stop;
 
@@ -34,6 +37,8 @@ enum Command {
     Fmt(fmt::FmtArgs),
     /// Serve the Language Server Protocol on stdin/stdout, for editors.
     Lsp(lsp::LspArgs),
+    /// Replay a recorded trial (`mocu run --record`) through its layout or another.
+    Replay(replay::ReplayArgs),
 }
 
 fn main() -> ExitCode {
@@ -52,5 +57,6 @@ fn main() -> ExitCode {
         Command::Run(args) => run::main(args),
         Command::Fmt(args) => fmt::main(args),
         Command::Lsp(args) => lsp::main(args),
+        Command::Replay(args) => replay::main(args),
     }
 }

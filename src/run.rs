@@ -39,6 +39,10 @@ pub struct RunArgs {
     /// Append the trial's event record (JSON lines) to this file.
     #[arg(long, value_name = "FILE.jsonl")]
     pub log: Option<PathBuf>,
+    /// Record the whole trial (world model, calls, events, video as received) to this MCAP
+    /// file (docs/recording.md).
+    #[arg(long, value_name = "FILE.mcap")]
+    pub record: Option<PathBuf>,
     /// Print the world-model subtree at PATH (e.g. `root.vehicles`) as JSON on exit.
     #[arg(long, value_name = "PATH")]
     pub dump: Option<String>,
@@ -65,7 +69,7 @@ pub struct RunArgs {
     pub input_script: Option<PathBuf>,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or("expected WxH, e.g. 1280x720")?;
     let w: u32 = w.parse().map_err(|_| format!("bad width `{w}`"))?;
     let h: u32 = h.parse().map_err(|_| format!("bad height `{h}`"))?;
@@ -213,7 +217,25 @@ pub fn main(args: RunArgs) -> ExitCode {
     });
     let windowed = !args.headless && std::env::var_os("DISPLAY").is_some_and(|d| !d.is_empty());
 
-    let ds = DataServer::default();
+    // `--frames N` headless: the frames clock the run, so that it is deterministic.
+    let stepped = (!windowed && args.frames.is_some()).then(crate::frames::Stepped::new);
+    let ds = stepped.as_ref().map_or_else(DataServer::default, |s| s.ds.clone());
+    // `--record`: from the first change on, before any module starts.
+    let layout_name = target.bundle.layouts[chosen].path.clone();
+    let manual = !windowed && args.frames.is_some();
+    let recorder = match &args.record {
+        None => None,
+        Some(p) => match crate::record::start(&ds, p, &target, &layout_name, manual) {
+            Ok(r) => Some(r),
+            Err(e) => {
+                eprintln!("mocu run: --record {}: {e}", p.display());
+                return ExitCode::from(2);
+            }
+        },
+    };
+    let log = args.log.is_some().then(|| sink.clone());
+    let sink: Arc<dyn EventSink> =
+        Arc::new(crate::record::TrialSink { ds: ds.clone(), log, recorder: recorder.clone() });
     let mut host = ModuleHost::new(ds.clone(), registry());
     let events = host.events();
     host.start_all(&module_specs(&target, &args));
@@ -316,7 +338,7 @@ pub fn main(args: RunArgs) -> ExitCode {
         }
     }
     if !ran_window {
-        code = run_headless(&ds, &args, screen, &events, &sink, &stop);
+        code = run_headless(&ds, &args, screen, &events, &sink, &stop, stepped.as_ref());
     }
 
     // The outputs first, with the display and the layout still live (`--dump
@@ -341,12 +363,20 @@ pub fn main(args: RunArgs) -> ExitCode {
     host.stop_all();
     ds.quiesce();
     drain_events(&events, &sink);
+    if let Some(r) = &recorder {
+        match r.finish() {
+            Ok(t) => {
+                eprintln!("mocu: recorded {} messages ({} bytes of JSON)", t.messages, t.bytes)
+            }
+            Err(e) => eprintln!("mocu run: --record: {e}"),
+        }
+    }
     drop(guard);
     ExitCode::from(code)
 }
 
 /// Every component of every layout of the bundle, once (the first definition wins).
-fn all_components(bundle: &mocu_language::Bundle) -> mocu_language::Program {
+pub(crate) fn all_components(bundle: &mocu_language::Bundle) -> mocu_language::Program {
     let mut p = mocu_language::Program::default();
     for l in &bundle.layouts {
         for c in &l.program.components {
@@ -368,6 +398,7 @@ fn run_headless(
     events: &Events,
     sink: &Arc<dyn EventSink>,
     stop: &crate::stop::Stop,
+    stepped: Option<&crate::frames::Stepped>,
 ) -> u8 {
     let mut display =
         match Display::new(ds, DisplayOptions::new(screen.0, screen.1).backend(BackendChoice::Cpu))
@@ -383,7 +414,7 @@ fn run_headless(
     // A summary of the vehicles at most once a second, when a frame is drawn and it
     // says something new: an idle run prints nothing.
     let mut said = (t0, String::new());
-    let inputs = crate::frames::Inputs { stop: &stop.requests, events };
+    let inputs = crate::frames::Inputs { stop: &stop.requests, events, stepped };
     let c = crate::frames::run(
         &mut display,
         pace,
@@ -478,7 +509,7 @@ fn summary(ds: &DataServer) -> String {
 }
 
 /// The subtree at a dotted object path (`root.vehicles`, `root`) as JSON.
-fn dump(ds: &DataServer, path: &str) -> Result<String, String> {
+pub(crate) fn dump(ds: &DataServer, path: &str) -> Result<String, String> {
     let mut segs: Vec<&str> = path.split('.').filter(|s| !s.is_empty()).collect();
     if segs.first() == Some(&"root") {
         segs.remove(0);

@@ -7,13 +7,14 @@
 //!   the feed's lock, so numbers follow the order of the changes and the stamps never go
 //!   back along them (a clock that steps back is held at the last stamp).
 //! - A feed's queue is unbounded: a feed never slows or blocks a writer. Dropping the
-//!   [`ChangeFeed`] closes it; the next change forgets it.
+//!   [`ChangeFeed`] closes it; the next change forgets it. A reader is woken only when a
+//!   change lands on its empty queue, and takes the queue whole.
 
 use crate::meta::{ObjectInfo, PropMeta};
 use crate::method::CallOutcome;
 use crate::server::DataServer;
 use mocu_value::{Guid, PropName, Value};
-use parking_lot::Mutex;
+use parking_lot::{Condvar, Mutex};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, SystemTime};
@@ -83,35 +84,76 @@ pub struct Stamped {
     pub change: Change,
 }
 
-/// An open feed: the changes since it was opened, in order.
+/// An open feed: the changes since it was opened, in order. A reader takes them in batches
+/// ([`ChangeFeed::take`]) and sleeps in [`ChangeFeed::wait`]: a writer wakes it only when it
+/// queues onto an empty queue, so a busy world costs one wake-up per batch, not per change.
 pub struct ChangeFeed {
-    rx: crossbeam_channel::Receiver<Stamped>,
+    q: Arc<Queue>,
+}
+
+struct Queue {
+    buf: Mutex<Pending>,
+    ready: Condvar,
+    closed: AtomicBool,
+}
+
+#[derive(Default)]
+struct Pending {
+    changes: Vec<Stamped>,
+    woken: bool,
+}
+
+/// Wakes a reader waiting in [`ChangeFeed::wait`] (its other inputs have something).
+#[derive(Clone)]
+pub struct FeedWaker(Arc<Queue>);
+
+impl FeedWaker {
+    pub fn wake(&self) {
+        self.0.buf.lock().woken = true;
+        self.0.ready.notify_all();
+    }
 }
 
 impl ChangeFeed {
-    /// The next change; waits at most `timeout` (`None` when nothing came or the server is
-    /// gone).
-    pub fn next_timeout(&self, timeout: Duration) -> Option<Stamped> {
-        self.rx.recv_timeout(timeout).ok()
+    /// Every change queued now, taken off the queue.
+    pub fn take(&self) -> Vec<Stamped> {
+        std::mem::take(&mut self.q.buf.lock().changes)
     }
 
-    /// Every change queued now, without waiting.
-    pub fn try_iter(&self) -> impl Iterator<Item = Stamped> + '_ {
-        self.rx.try_iter()
+    /// Every change queued now, without waiting (as [`ChangeFeed::take`]).
+    pub fn try_iter(&self) -> impl Iterator<Item = Stamped> {
+        self.take().into_iter()
     }
 
-    /// The queue itself, to wait on it beside other channels (`crossbeam_channel::select!`).
-    pub fn receiver(&self) -> &crossbeam_channel::Receiver<Stamped> {
-        &self.rx
+    /// Waits until a change is queued, the feed is woken ([`FeedWaker`]) or `timeout`
+    /// passes; returns whether a change is queued.
+    pub fn wait(&self, timeout: Duration) -> bool {
+        let mut p = self.q.buf.lock();
+        if p.changes.is_empty() && !p.woken {
+            let _ = self.q.ready.wait_for(&mut p, timeout);
+        }
+        p.woken = false;
+        !p.changes.is_empty()
+    }
+
+    /// A handle that wakes [`ChangeFeed::wait`].
+    pub fn waker(&self) -> FeedWaker {
+        FeedWaker(self.q.clone())
     }
 
     /// How many changes are queued.
     pub fn len(&self) -> usize {
-        self.rx.len()
+        self.q.buf.lock().changes.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.rx.is_empty()
+        self.len() == 0
+    }
+}
+
+impl Drop for ChangeFeed {
+    fn drop(&mut self) {
+        self.q.closed.store(true, Ordering::Relaxed);
     }
 }
 
@@ -126,7 +168,7 @@ struct FeedState {
     seq: u64,
     calls: u64,
     last: Option<SystemTime>,
-    senders: Vec<crossbeam_channel::Sender<Stamped>>,
+    queues: Vec<Arc<Queue>>,
 }
 
 impl Feeds {
@@ -148,12 +190,16 @@ impl DataServer {
     /// Opens a change feed: from now on every change, call, outcome and stream message of
     /// this server is queued on it, stamped and numbered when it happened.
     pub fn change_feed(&self) -> ChangeFeed {
-        let (tx, rx) = crossbeam_channel::unbounded();
+        let q = Arc::new(Queue {
+            buf: Mutex::new(Pending::default()),
+            ready: Condvar::new(),
+            closed: AtomicBool::new(false),
+        });
         let feeds = &self.inner.feeds;
         let mut st = feeds.state.lock();
-        st.senders.push(tx);
+        st.queues.push(q.clone());
         feeds.open.store(true, Ordering::Relaxed);
-        ChangeFeed { rx }
+        ChangeFeed { q }
     }
 
     /// Hands a change to every open feed; `change` is built only when one is open. Called
@@ -164,7 +210,9 @@ impl DataServer {
             return;
         }
         let mut st = feeds.state.lock();
-        if st.senders.is_empty() {
+        st.queues.retain(|q| !q.closed.load(Ordering::Relaxed));
+        if st.queues.is_empty() {
+            feeds.open.store(false, Ordering::Relaxed);
             return;
         }
         let now = self.wall_time();
@@ -175,9 +223,14 @@ impl DataServer {
         st.last = Some(wall);
         st.seq += 1;
         let stamped = Stamped { seq: st.seq, wall, change: change() };
-        st.senders.retain(|tx| tx.send(stamped.clone()).is_ok());
-        if st.senders.is_empty() {
-            feeds.open.store(false, Ordering::Relaxed);
+        for q in &st.queues {
+            let mut p = q.buf.lock();
+            let was_empty = p.changes.is_empty();
+            p.changes.push(stamped.clone());
+            drop(p);
+            if was_empty {
+                q.ready.notify_all();
+            }
         }
     }
 }

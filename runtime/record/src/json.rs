@@ -11,12 +11,39 @@ pub(crate) fn string(out: &mut Vec<u8>, s: &str) {
     let _ = serde_json::to_writer(&mut *out, s);
 }
 
-pub(crate) fn int(out: &mut Vec<u8>, i: i64) {
-    out.extend_from_slice(i.to_string().as_bytes());
+/// `a.b` as one JSON string (a property's path: its object's path and its name).
+pub(crate) fn dotted(out: &mut Vec<u8>, a: &str, b: &str) {
+    let plain = |s: &str| s.bytes().all(|c| c >= 0x20 && c != b'"' && c != b'\\');
+    if plain(a) && plain(b) {
+        out.push(b'"');
+        out.extend_from_slice(a.as_bytes());
+        out.push(b'.');
+        out.extend_from_slice(b.as_bytes());
+        out.push(b'"');
+    } else {
+        string(out, &format!("{a}.{b}"));
+    }
 }
 
-pub(crate) fn uint(out: &mut Vec<u8>, i: u64) {
-    out.extend_from_slice(i.to_string().as_bytes());
+pub(crate) fn int(out: &mut Vec<u8>, i: i64) {
+    if i < 0 {
+        out.push(b'-');
+    }
+    uint(out, i.unsigned_abs());
+}
+
+pub(crate) fn uint(out: &mut Vec<u8>, mut i: u64) {
+    let mut digits = [0u8; 20];
+    let mut n = digits.len();
+    loop {
+        n -= 1;
+        digits[n] = b'0' + (i % 10) as u8;
+        i /= 10;
+        if i == 0 {
+            break;
+        }
+    }
+    out.extend_from_slice(&digits[n..]);
 }
 
 /// A float: finite ones as JSON numbers that keep a fraction (`1.0`, not `1`), the others
@@ -158,6 +185,15 @@ mod tests {
         assert_eq!(text(|o| base64(o, b"foo")), "Zm9v");
         assert_eq!(text(|o| base64(o, b"foobar")), "Zm9vYmFy");
         assert_eq!(text(|o| base64(o, &[0xff, 0xfe, 0x00, 0x01])), "//4AAQ==");
+    }
+
+    #[test]
+    fn integers_and_dotted_paths_are_written_without_allocating_as_json_reads_them() {
+        assert_eq!(text(|o| int(o, i64::MIN)), i64::MIN.to_string());
+        assert_eq!(text(|o| int(o, 0)), "0");
+        assert_eq!(text(|o| uint(o, u64::MAX)), u64::MAX.to_string());
+        assert_eq!(text(|o| dotted(o, "root.a", "speed")), r#""root.a.speed""#);
+        assert_eq!(text(|o| dotted(o, "root.\"q\"", "x")), r#""root.\"q\".x""#);
     }
 
     #[test]

@@ -18,7 +18,7 @@ mod translate;
 mod world;
 
 use crossbeam_channel::{Receiver, Sender};
-use mocu_dataserver::{ChangeFeed, DataServer, Value};
+use mocu_dataserver::{ChangeFeed, DataServer, FeedWaker, Value};
 use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Mutex;
@@ -88,6 +88,7 @@ pub struct Totals {
 pub struct Recorder {
     ds: DataServer,
     events: Mutex<Option<Sender<Input>>>,
+    waker: FeedWaker,
     thread: Mutex<Option<JoinHandle<Result<Totals, String>>>>,
 }
 
@@ -110,6 +111,7 @@ impl Recorder {
         }
         out.flush()?;
         let feed = ds.change_feed();
+        let waker = feed.waker();
         let existing = world::walk(ds);
         let (tx, rx) = crossbeam_channel::unbounded();
         let thread = std::thread::Builder::new()
@@ -119,6 +121,7 @@ impl Recorder {
         Ok(Recorder {
             ds: ds.clone(),
             events: Mutex::new(Some(tx)),
+            waker,
             thread: Mutex::new(Some(thread)),
         })
     }
@@ -135,6 +138,7 @@ impl Recorder {
         let e = Event { at, source: source.into(), event: event.into(), fields };
         if let Some(tx) = &*lock(&self.events) {
             let _ = tx.send(Input::Event(e));
+            self.waker.wake();
         }
     }
 
@@ -144,6 +148,7 @@ impl Recorder {
         let (tx, rx) = crossbeam_channel::bounded(1);
         let sent = lock(&self.events).as_ref().is_some_and(|e| e.send(Input::Sync(tx)).is_ok());
         if sent {
+            self.waker.wake();
             let _ = rx.recv();
         }
     }
@@ -152,6 +157,7 @@ impl Recorder {
     /// Later changes and events are not recorded; a second call returns empty totals.
     pub fn finish(&self) -> Result<Totals, String> {
         lock(&self.events).take();
+        self.waker.wake();
         let thread = lock(&self.thread).take();
         match thread {
             Some(t) => t.join().map_err(|_| "the recorder panicked".to_string())?,
@@ -176,8 +182,9 @@ pub(crate) fn nanos(t: SystemTime) -> u64 {
     t.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos().min(u64::MAX as u128) as u64)
 }
 
-/// Changes written between two looks at the clock and the events.
-const BATCH: usize = 4096;
+/// How long the writer lets changes gather after it is woken, so that a busy world is
+/// written in batches (one wake-up per batch, not per change).
+const GATHER: Duration = Duration::from_millis(5);
 
 /// Writes every change queued now, then answers a [`Recorder::sync`].
 fn synced(
@@ -185,16 +192,16 @@ fn synced(
     feed: &ChangeFeed,
     done: Sender<()>,
 ) -> Result<(), String> {
-    for c in feed.try_iter().take(feed.len()) {
+    for c in feed.take() {
         t.change(c)?;
     }
     let _ = done.send(());
     Ok(())
 }
 
-/// The writer thread: changes and events as they come, a flush at most [`FLUSH_EVERY`]
-/// after the first unflushed message; ends (finishing the file) when the recorder is
-/// dropped. An idle recording sleeps.
+/// The writer thread: changes in batches and events as they come, a flush at most
+/// [`FLUSH_EVERY`] after the first unflushed message; ends (finishing the file) when the
+/// recorder is finished or dropped. An idle recording sleeps.
 fn write_loop(
     out: file::Out,
     feed: ChangeFeed,
@@ -204,35 +211,32 @@ fn write_loop(
 ) -> Result<Totals, String> {
     let mut t = translate::Translator::new(out, start, existing)?;
     let mut dirty_since: Option<Instant> = None;
-    let changes = feed.receiver();
     loop {
         // Asleep until something comes, or until the open chunk is due on disk.
         let wait = dirty_since.map_or(Duration::from_secs(3600), |d| {
             (d + FLUSH_EVERY).saturating_duration_since(Instant::now())
         });
-        let mut open = true;
+        if feed.wait(wait) {
+            std::thread::sleep(GATHER);
+        }
         let before = t.written();
-        crossbeam_channel::select! {
-            recv(changes) -> c => if let Ok(c) = c { t.change(c)? },
-            recv(events) -> e => match e {
+        for c in feed.take() {
+            t.change(c)?;
+        }
+        let mut open = true;
+        loop {
+            match events.try_recv() {
                 Ok(Input::Event(e)) => t.event(e)?,
                 Ok(Input::Sync(done)) => synced(&mut t, &feed, done)?,
-                Err(_) => open = false,
-            },
-            default(wait) => {}
+                Err(crossbeam_channel::TryRecvError::Empty) => break,
+                Err(crossbeam_channel::TryRecvError::Disconnected) => {
+                    open = false;
+                    break;
+                }
+            }
         }
         if !open {
             break;
-        }
-        // What else is queued, in one go (bounded, so that a flush is never starved).
-        for c in feed.try_iter().take(BATCH) {
-            t.change(c)?;
-        }
-        for e in events.try_iter().take(BATCH) {
-            match e {
-                Input::Event(e) => t.event(e)?,
-                Input::Sync(done) => synced(&mut t, &feed, done)?,
-            }
         }
         if t.written() > before && dirty_since.is_none() {
             dirty_since = Some(Instant::now());
@@ -242,7 +246,7 @@ fn write_loop(
             dirty_since = None;
         }
     }
-    for c in feed.try_iter() {
+    for c in feed.take() {
         t.change(c)?;
     }
     t.finish()

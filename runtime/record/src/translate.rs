@@ -160,7 +160,7 @@ impl Translator {
                 });
                 json::uint(b, object.get());
                 b.extend_from_slice(b",\"path\":");
-                json::string(b, &format!("{}.{name}", self.world.path(object)));
+                json::dotted(b, &self.world.path(object), name.as_str());
                 b.extend_from_slice(b",\"name\":");
                 json::string(b, name.as_str());
                 b.extend_from_slice(b",\"kind\":\"");
