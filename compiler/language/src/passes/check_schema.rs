@@ -30,6 +30,17 @@ impl Checker<'_, '_> {
         let l = self.schema.lookup(p.base_type.as_deref(), from_root, &p.segments);
         if let Lookup::Unknown { object_type, index, candidates } = &l {
             let name = &p.segments[*index];
+            // `check_types` reported it at the segment already (`call usv.upload_rout()`):
+            // one mistake, one diagnostic.
+            let inside = |d: &crate::diagnostics::Diagnostic| {
+                d.code == codes::UNKNOWN_PROPERTY
+                    && d.span.file == span.file
+                    && span.start <= d.span.start
+                    && d.span.end <= span.end
+            };
+            if self.diags.iter().any(inside) {
+                return None;
+            }
             self.diags
                 .error(
                     codes::UNKNOWN_PROPERTY,
