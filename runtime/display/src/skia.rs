@@ -115,6 +115,11 @@ impl SkiaCanvas {
 
     /// Gives the pixmap back with its drawn-on tiles and whether it is wholly opaque.
     pub(crate) fn into_parts(mut self) -> (Pixmap, Tiles, bool) {
+        // A picture left recording (its painter panicked inside it): back to the canvas
+        // it was recorded for.
+        while let Some(rec) = self.recording.take() {
+            self = rec.outer;
+        }
         self.finish();
         (self.pixmap, self.tiles, self.opaque)
     }

@@ -138,3 +138,16 @@ fn under_a_rotation_a_picture_is_drawn_directly() {
     });
     assert_eq!(w, 0);
 }
+
+#[test]
+fn a_picture_left_unfinished_gives_back_the_canvas_it_was_recorded_for() {
+    // What a painter that panics inside a picture leaves behind.
+    let mut c = canvas();
+    c.fill_rect(Rect::new(0.0, 0.0, 10.0, 10.0), Color::WHITE);
+    let at = Point::new(100.0, 100.0);
+    assert!(c.begin_picture(picture_key("test face unfinished"), bounds(at)));
+    face(&mut c, at);
+    let pm = c.into_pixmap();
+    assert_eq!((pm.width(), pm.height()), (W, H), "the layer's pixmap, not the sprite");
+    assert_eq!(pm.pixel(5, 5).unwrap().alpha(), 255, "what was drawn before the picture");
+}

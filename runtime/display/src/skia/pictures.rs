@@ -44,7 +44,7 @@ fn cache() -> &'static Mutex<Cache> {
 
 /// A picture being recorded: the canvas drawing before it began, and where it goes.
 pub(super) struct Recording {
-    outer: SkiaCanvas,
+    pub outer: SkiaCanvas,
     key: Key,
     at: IRect,
 }
