@@ -19,6 +19,8 @@ struct Shared {
     object: Guid,
     keep: usize,
     list: Mutex<Vec<(String, String, String)>>,
+    /// The `time` of the last feedback record shown.
+    shown: Mutex<f64>,
     subs: Mutex<Vec<SubscriptionId>>,
     watches: Mutex<Vec<PathWatch>>,
 }
@@ -36,6 +38,7 @@ impl Toasts {
             object,
             keep: keep.clamp(1, 20),
             list: Mutex::new(Vec::new()),
+            shown: Mutex::new(f64::NEG_INFINITY),
             subs: Mutex::new(Vec::new()),
             watches: Mutex::new(Vec::new()),
         });
@@ -97,6 +100,16 @@ impl Shared {
                 .and_then(|v| v.as_str().map(str::to_string))
                 .unwrap_or_default()
         };
+        // Each record once: a notification handled after a newer record was written reads
+        // the newer one, and the newer one's own notification then has nothing new.
+        let time = ds.try_get(f, PropName::new("time")).and_then(|v| v.as_f64());
+        {
+            let mut shown = self.shown.lock();
+            match time {
+                Some(t) if t > *shown => *shown = t,
+                _ => return,
+            }
+        }
         let (target, state, reason) = (get("target"), get("state"), get("reason"));
         let short = target.strip_prefix("root.").unwrap_or(&target).to_string();
         let short = short.strip_prefix("vehicles.").unwrap_or(&short).to_string();

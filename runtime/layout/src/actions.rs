@@ -161,7 +161,13 @@ fn feedback(sh: &Arc<Shared>, origin: Option<Guid>, target: &str, state: &str, r
         let _ = ds.set(f, "target", Value::str(target));
         let _ = ds.set(f, "state", Value::str(state));
         let _ = ds.set(f, "reason", Value::str(reason));
-        let _ = ds.set(f, "time", Value::Float(ds.wall_secs()));
+        // Written last, and never twice the same: its change marks a complete record (the
+        // toast list follows it), even when a call is answered at the instant it was made
+        // (a clock that moves in steps: headless `--frames`, replay).
+        let last = ds.try_get(f, "time".into()).and_then(|v| v.as_f64()).unwrap_or(0.0);
+        let now = ds.wall_secs();
+        let time = if now > last { now } else { last + 1e-6 };
+        let _ = ds.set(f, "time", Value::Float(time));
     }
 }
 
