@@ -111,7 +111,17 @@ impl Shared {
                 &Brush::Solid(Color::rgba(255, 255, 255, 28)),
             );
         }
-        if data.iter().any(|d| props.contains_key(d))
+        // A component with a `stale` parameter draws its own veil and state field (the
+        // status header, stdlib/status.mocu): a tag here would sit on its text.
+        let own_stale = props.get("component").and_then(Value::as_str).is_some_and(|c| {
+            self.lib
+                .lock()
+                .components
+                .get(c)
+                .is_some_and(|c| c.slots.iter().any(|(n, _)| n == "stale"))
+        });
+        if !own_stale
+            && data.iter().any(|d| props.contains_key(d))
             && (props.get("stale").and_then(Value::as_bool) == Some(true)
                 || props.get("aged").and_then(Value::as_bool) == Some(true))
         {
@@ -121,7 +131,7 @@ impl Shared {
             stale_veil(c, b, area, radius, s as f32);
         }
         let state = props.get("feedback").and_then(Value::as_str).unwrap_or("");
-        let age = feedback_at.map_or(Duration::MAX, |t| t.elapsed());
+        let age = feedback_at.map_or(Duration::MAX, |t| self.ds.now().saturating_duration_since(t));
         let (col, show_reason) = match state {
             "pending" => (Some(Color::rgb(0xf5, 0x9e, 0x0b)), false),
             "accepted" if age < self.config.accepted_for => {
