@@ -66,3 +66,18 @@ fn a_recording_without_keyframes_seeks_by_playing_its_changes() {
     p.seek(p.at_secs(21.0)).unwrap();
     assert_eq!(prop(&p, 1, 2), Some(value(210, 2)));
 }
+
+#[test]
+fn a_recording_cut_short_replays_up_to_its_last_complete_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole, cut) = (dir.path().join("trial.mcap"), dir.path().join("cut.mcap"));
+    write(&whole, Synthetic { seconds: 120, ..SMALL });
+    let bytes = std::fs::read(&whole).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).unwrap();
+    let mut p = Player::open(&cut).unwrap();
+    assert!(!p.recording().indexed(), "a killed recorder leaves no summary");
+    let last = (p.end_ns() - p.start_ns()) as f64 / 1e9;
+    assert!(last > 30.0 && last < 120.0, "{last} s kept");
+    p.seek(p.at_secs(25.0)).unwrap();
+    assert_eq!(prop(&p, 2, 1), Some(value(250, 1)));
+}
