@@ -546,6 +546,9 @@ impl Shared {
                 }
             }
         }
+        // A template's instance came or went (a vehicle's strip): the built-in alert window
+        // is placed again once the new widgets have their positions.
+        let templated = events.iter().any(|e| !matches!(e, InboxEvent::Node(..)));
         for e in events {
             match e {
                 InboxEvent::Node(..) => {}
@@ -558,6 +561,9 @@ impl Shared {
             }
         }
         self.evaluate(&mut st);
+        if templated {
+            crate::alerts::place_layer(self, &st);
+        }
     }
 
     /// Evaluates every dirty cell once, in order of level (a shared `let`'s cell before its
