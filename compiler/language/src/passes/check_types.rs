@@ -43,6 +43,7 @@ pub fn check_types(
         lets: Vec::new(),
         program: Program::default(),
         mode_refs: Vec::new(),
+        signatures: HashMap::new(),
     };
     t.program.files = modules.iter().map(|m| m.path.clone()).collect();
     for m in 0..modules.len() {
@@ -84,6 +85,9 @@ struct Typer<'a, 'd> {
     program: Program,
     /// `mode NAME` actions, checked against the declared modes at the end (E0212).
     mode_refs: Vec<(String, Span)>,
+    /// Each component's signature, worked out once per module that uses it (its defaults
+    /// lowered once, not once per widget).
+    signatures: HashMap<(ModuleId, String), Option<Signature>>,
 }
 
 /// Where windows, widgets and watches go: the program, or a template.
@@ -356,6 +360,15 @@ impl Typer<'_, '_> {
 
     /// The component's parameters as (name, type, default), its events, and whether native.
     fn signature(&mut self, module: ModuleId, name: &str) -> Option<Signature> {
+        if let Some(known) = self.signatures.get(&(module, name.to_string())) {
+            return known.clone();
+        }
+        let sig = self.work_out_signature(module, name);
+        self.signatures.insert((module, name.to_string()), sig.clone());
+        sig
+    }
+
+    fn work_out_signature(&mut self, module: ModuleId, name: &str) -> Option<Signature> {
         if let Some(n) = builtins::native(name) {
             let params = n
                 .params
@@ -433,8 +446,10 @@ impl Typer<'_, '_> {
             lets: std::mem::take(&mut self.lets),
             program: Program::default(),
             mode_refs: Vec::new(),
+            signatures: std::mem::take(&mut self.signatures),
         };
         let r = f(&mut t);
+        self.signatures = t.signatures;
         self.top_lets = t.top_lets;
         self.lets_lowered = t.lets_lowered;
         self.lets = t.lets;
@@ -449,11 +464,13 @@ impl Typer<'_, '_> {
         let (params, events, native) = self.signature(scope.module, &w.component.name)?;
         let mut arg_scope = scope.clone();
         for (name, ty, _) in &params {
-            arg_scope = arg_scope.with(name, mk(ty.clone(), Node::Param(name.clone()), w.span));
+            arg_scope
+                .locals
+                .push((name.clone(), mk(ty.clone(), Node::Param(name.clone()), w.span)));
         }
         let mut args = Vec::new();
         let mut visible = None;
-        for a in &w.args {
+        for (i, a) in w.args.iter().enumerate() {
             if a.name.name == "visible" {
                 visible = Some(self.condition(&a.value, &arg_scope, "`visible`"));
                 continue;
@@ -461,6 +478,15 @@ impl Typer<'_, '_> {
             let Some((_, ty, _)) = params.iter().find(|(n, ..)| *n == a.name.name) else {
                 continue;
             };
+            // `range 0 to 40`: the `to 40` that follows is the one diagnostic (resolve_names).
+            if matches!(ty.kind, TypeKind::Range { .. })
+                && w.args
+                    .get(i + 1)
+                    .is_some_and(|n| n.name.name == "to" && !params.iter().any(|(p, ..)| p == "to"))
+            {
+                self.lower(&a.value, &arg_scope);
+                continue;
+            }
             let b = if ty.kind == TypeKind::Bool {
                 self.condition(&a.value, &arg_scope, &format!("`{}`", a.name.name))
             } else {
@@ -518,7 +544,7 @@ impl Typer<'_, '_> {
             } else {
                 Node::Param(p.name.clone())
             };
-            s = s.with(&p.name, mk(p.ty.clone(), node, c.span));
+            s.locals.push((p.name.clone(), mk(p.ty.clone(), node, c.span)));
         }
         let mut shapes = Vec::new();
         for stmt in &c.body {

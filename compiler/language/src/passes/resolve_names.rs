@@ -111,7 +111,7 @@ impl Resolver<'_, '_> {
                 for inner in &e.items {
                     self.item(inner, &s, None);
                     if let Item::Let(l) = inner {
-                        s = s.with(&l.name.name, Some(l.name.span));
+                        s.locals.push((l.name.name.clone(), Some(l.name.span)));
                     }
                 }
             }
@@ -191,18 +191,26 @@ impl Resolver<'_, '_> {
             // Unknown component: its arguments may name each other (`alarm value > 35`); no
             // follow-on "unknown name" for them.
             for a in &w.args {
-                arg_scope = arg_scope.with(&a.name.name, None);
+                arg_scope.locals.push((a.name.name.clone(), None));
             }
         }
         if let Some((params, _)) = &signature {
             for (p, _) in params {
-                arg_scope = arg_scope.with(p, None);
+                arg_scope.locals.push((p.clone(), None));
             }
         }
         for (i, a) in w.args.iter().enumerate() {
+            // `range 0 to 40` where `range` is unknown too: that is the one diagnostic.
+            let after_unknown = |p: &str| {
+                i.checked_sub(1).is_some_and(|k| {
+                    let prev = &w.args[k].name.name;
+                    prev != "visible" && !params_has(&signature, prev) && p == "to"
+                })
+            };
             if let Some((params, _)) = &signature
                 && a.name.name != "visible"
                 && !params.iter().any(|(p, _)| *p == a.name.name)
+                && !after_unknown(&a.name.name)
             {
                 let d = self.diags.error(
                     codes::UNKNOWN_PARAM,
@@ -212,8 +220,12 @@ impl Resolver<'_, '_> {
                 match i.checked_sub(1).map(|p| &w.args[p]) {
                     // `range 0 to 40`: the `to` reads as a parameter.
                     Some(prev) if a.name.name == "to" => {
-                        let number = |e: &Expr| match e.kind {
+                        let number = |e: &Expr| match &e.kind {
                             ExprKind::Number { value, .. } => value.to_string(),
+                            ExprKind::Unary(crate::ast::UnOp::Neg, arg) => match arg.kind {
+                                ExprKind::Number { value, .. } => format!("-{value}"),
+                                _ => "MIN".into(),
+                            },
                             _ => "MIN".into(),
                         };
                         let (min, max) = (number(&prev.value), number(&a.value));
@@ -261,13 +273,13 @@ impl Resolver<'_, '_> {
             if let Param::Value { default: Some(d), .. } = p {
                 self.expr(d, &Scope { module: m, ..Scope::default() });
             }
-            s = s.with(&p.name().name, None);
+            s.locals.push((p.name().name.clone(), None));
         }
         for stmt in &c.body {
             match stmt {
                 Stmt::Let(l) => {
                     self.expr(&l.value, &s);
-                    s = s.with(&l.name.name, Some(l.name.span));
+                    s.locals.push((l.name.name.clone(), Some(l.name.span)));
                 }
                 Stmt::Primitive(p) => {
                     p.args.iter().for_each(|e| self.expr(e, &s));
@@ -618,4 +630,9 @@ fn stdlib_components() -> impl Iterator<Item = (&'static str, &'static str)> {
 /// stdlib/controls.mocu".
 fn stdlib_file_of(component: &str) -> Option<&'static str> {
     stdlib_components().find(|(_, c)| *c == component).map(|(f, _)| f)
+}
+
+/// Whether a component's signature (when known) has parameter `name`.
+fn params_has(signature: &Option<ParamsAndEvents>, name: &str) -> bool {
+    signature.as_ref().is_some_and(|(params, _)| params.iter().any(|(p, _)| p == name))
 }
