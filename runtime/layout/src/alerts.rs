@@ -133,7 +133,8 @@ pub(crate) fn ensure_layer(sh: &Arc<Shared>, st: &mut State, program: &Program) 
     }
     if let Ok(g) = publish_layer(ds, st.display, sh.config.screen) {
         st.owned_push(g);
-        follow(sh, st.display, g);
+        let subs = follow(sh, st.display, g);
+        st.subs.extend(subs);
     }
 }
 
@@ -201,9 +202,10 @@ pub(crate) fn place_layer(sh: &Shared, st: &State) {
 
 /// Places the window again whenever an alert is raised or acknowledged and whenever a
 /// window comes or goes (a vehicle's strip appears after the layout loaded), until the
-/// window is gone.
-fn follow(sh: &Arc<Shared>, display: Guid, layer: Guid) {
-    let Some(folder) = alerts_folder(sh) else { return };
+/// window is gone. The layout ends the subscriptions it returns when it is unloaded.
+fn follow(sh: &Arc<Shared>, display: Guid, layer: Guid) -> Vec<SubscriptionId> {
+    let Some(folder) = alerts_folder(sh) else { return Vec::new() };
+    let mut subs = Vec::new();
     let ds = &sh.ds;
     let exec = ds.serial_executor();
     let screen = sh.config.screen;
@@ -221,8 +223,10 @@ fn follow(sh: &Arc<Shared>, display: Guid, layer: Guid) {
         });
         if let Ok(sub) = sub {
             let _ = id.set(sub);
+            subs.push(sub);
         }
     }
+    subs
 }
 
 fn place(ds: &DataServer, display: Guid, layer: Guid, screen: (f64, f64)) {

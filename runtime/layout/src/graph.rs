@@ -7,7 +7,9 @@ use crate::convert::{to_slot, to_value};
 use crate::events::EventSink;
 use crate::lower::{Base, Source};
 use crate::watch::WatchRt;
-use mocu_dataserver::{DataServer, DottedPath, Executor, Kind, ObjectInfo, PathEvent, PathWatch};
+use mocu_dataserver::{
+    DataServer, DottedPath, Executor, Kind, ObjectInfo, PathEvent, PathWatch, SubscriptionId,
+};
 use mocu_jit::{self as jit, Slot};
 use mocu_language::program::Program;
 use mocu_value::{Guid, PropName, Value};
@@ -179,6 +181,9 @@ pub(crate) struct State {
     /// IR nodes compiled since load (see [`LayoutStats::ir_nodes`]).
     pub(crate) ir_nodes: usize,
     pub(crate) closed: bool,
+    /// Subscriptions of the layout's own machinery (the alert window following alerts and
+    /// windows), ended when the layout is unloaded.
+    pub(crate) subs: Vec<SubscriptionId>,
     /// The top-level items now live, for incremental reload.
     pub(crate) items: Vec<crate::reload::ItemRec>,
 }
@@ -233,6 +238,7 @@ impl Layout {
                 evaluations: 0,
                 ir_nodes: 0,
                 closed: false,
+                subs: Vec::new(),
                 items: Vec::new(),
             }),
             inbox: Mutex::new(Inbox::default()),
@@ -317,8 +323,9 @@ impl Drop for Layout {
             let mut watches: Vec<PathWatch> =
                 st.nodes.iter_mut().filter_map(|n| n.watch.take()).collect();
             watches.extend(st.templates.iter_mut().filter_map(|t| t.source_watch.take()));
-            let subs: Vec<_> =
+            let mut subs: Vec<_> =
                 st.templates.iter_mut().filter_map(|t| t.children_sub.take()).collect();
+            subs.append(&mut st.subs);
             let mut objects = std::mem::take(&mut st.owned);
             for i in st.instances.iter_mut().filter_map(Option::take) {
                 objects.extend(i.objects);
