@@ -240,6 +240,9 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
     // A UTF-8 byte order mark is not text.
     let mut i = if text.starts_with('\u{FEFF}') { 3 } else { 0 };
     let mut line_start = true;
+    // The last code was the `}` that closed a top-level item: any item keyword may follow on
+    // the same line (`window a { … } let x = 1`: whitespace is free).
+    let mut item_closed = false;
     while i < bytes.len() {
         let b = bytes[i];
         match b {
@@ -270,11 +273,20 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
         }
         let at_line_start = line_start;
         line_start = false;
+        let after_item = std::mem::take(&mut item_closed);
         let column0 = i == 0 || bytes[i - 1] == b'\n';
-        if at_line_start
-            && (depth_stack.is_empty() || (column0_splits && column0))
-            && starts_keyword(&bytes[i..])
-        {
+        let item_here = if depth_stack.is_empty() {
+            // Mid-line, after an item's closing `}`, or at a keyword that cannot continue
+            // an item (`let`, `window`, …: never part of an expression).
+            at_line_start
+                || after_item
+                || (!starts.is_empty()
+                    && !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_')
+                    && starts_keyword_in(MID_LINE_KEYWORDS, &bytes[i..]))
+        } else {
+            at_line_start && column0_splits && column0
+        };
+        if item_here && starts_keyword(&bytes[i..]) {
             if let Some(s) = stray_start.take() {
                 stray.push((s, trim_end(text, s, i)));
             }
@@ -297,7 +309,7 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
             }
             b'{' => depth_stack.push(i),
             b'}' => {
-                depth_stack.pop();
+                item_closed = depth_stack.pop().is_some() && depth_stack.is_empty();
             }
             _ => {}
         }
@@ -367,8 +379,16 @@ fn trim_end(text: &str, start: usize, end: usize) -> usize {
     last
 }
 
+/// Item keywords that no item contains at its top level (`in` and `for` do: `for each v in
+/// …`, `menu for type …`; `design` may be a name).
+const MID_LINE_KEYWORDS: &[&str] = &["use", "let", "window", "component", "bind", "menu", "watch"];
+
 fn starts_keyword(rest: &[u8]) -> bool {
-    ITEM_KEYWORDS.iter().any(|k| {
+    starts_keyword_in(ITEM_KEYWORDS, rest)
+}
+
+fn starts_keyword_in(keywords: &[&str], rest: &[u8]) -> bool {
+    keywords.iter().any(|k| {
         rest.starts_with(k.as_bytes())
             && rest.get(k.len()).is_none_or(|c| !(c.is_ascii_alphanumeric() || *c == b'_'))
     })
