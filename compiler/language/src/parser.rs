@@ -281,7 +281,7 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
             at_line_start
                 || after_item
                 || (!starts.is_empty()
-                    && !(bytes[i - 1].is_ascii_alphanumeric() || bytes[i - 1] == b'_')
+                    && !is_name_byte(bytes[i - 1])
                     && starts_keyword_in(MID_LINE_KEYWORDS, &bytes[i..]))
         } else {
             at_line_start && column0_splits && column0
@@ -387,10 +387,13 @@ fn starts_keyword(rest: &[u8]) -> bool {
     starts_keyword_in(ITEM_KEYWORDS, rest)
 }
 
+fn is_name_byte(b: u8) -> bool {
+    b.is_ascii_alphanumeric() || b == b'_'
+}
+
 fn starts_keyword_in(keywords: &[&str], rest: &[u8]) -> bool {
     keywords.iter().any(|k| {
-        rest.starts_with(k.as_bytes())
-            && rest.get(k.len()).is_none_or(|c| !(c.is_ascii_alphanumeric() || *c == b'_'))
+        rest.starts_with(k.as_bytes()) && rest.get(k.len()).is_none_or(|c| !is_name_byte(*c))
     })
 }
 
