@@ -16,22 +16,13 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
+mod shipped;
+use shipped::layouts;
+
 const SIZES: [(u32, u32); 4] = [(800, 480), (1280, 720), (1920, 1080), (3840, 2160)];
 
 /// Components whose whole box must be on the screen.
 const CRITICAL: [&str; 3] = ["AlertLayer", "StatusHeader", "AlertBanner"];
-
-fn layouts() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../layouts");
-    let mut out: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "mocu"))
-        .collect();
-    out.sort();
-    assert!(out.len() >= 4, "the shipped layouts");
-    out
-}
 
 /// A layout running against the simulator for five simulated seconds, a critical alert
 /// raised; with the display and the widget renderer when `draw`.

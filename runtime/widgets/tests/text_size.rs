@@ -17,9 +17,11 @@ use mocu_layout::{Layout, LayoutConfig, NullSink};
 use mocu_sim::{Sim, SimConfig};
 use mocu_widgets::Library;
 use std::collections::HashMap;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
+
+mod shipped;
+use shipped::layouts;
 
 const MIN_SIZE: f32 = 12.0;
 const SCREEN: (u32, u32) = (800, 480);
@@ -73,18 +75,6 @@ impl Canvas for Sizes {
         }
         self.main.draw_text(text, at, style)
     }
-}
-
-fn layouts() -> Vec<PathBuf> {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../layouts");
-    let mut out: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "mocu"))
-        .collect();
-    out.sort();
-    assert!(out.len() >= 4, "the shipped layouts");
-    out
 }
 
 /// Every text run of `file` on an 800×480 screen: (widget, text, height in px).
