@@ -31,8 +31,8 @@ pub fn check_duration(e: &Expr, usage: Use, diags: &mut Diagnostics) -> Option<f
         return None;
     }
     let what = match usage {
-        Use::Hold => "a hold time (`for 5s`)",
-        Use::Repeat => "a repeat period (`repeat every 30s`)",
+        Use::Hold => "the hold time after `for`",
+        Use::Repeat => "the repeat period after `repeat every`",
         Use::Swap => "a swap's duration",
     };
     let Some(ms) = e.constant().and_then(|c| c.number()) else {
@@ -43,13 +43,18 @@ pub fn check_duration(e: &Expr, usage: Use, diags: &mut Diagnostics) -> Option<f
         return None;
     };
     if !ms.is_finite() || ms < 0.0 || (usage == Use::Repeat && ms == 0.0) {
+        // The fix, in the user's own number where there is one (`-30s` → `30s`).
+        let positive = if ms.is_finite() && ms != 0.0 { literal(-ms) } else { "1s".into() };
         let (label, help) = match usage {
-            Use::Repeat => {
-                ("must be more than zero", "a repeat period is positive: `repeat every 30s`")
-            }
+            Use::Repeat => (
+                "must be more than zero",
+                format!("a repeat period is positive: `repeat every {positive}`"),
+            ),
             _ => (
                 "must not be negative",
-                "a duration counts forward from now: write `5s`, or `0s` for none",
+                format!(
+                    "a duration counts forward from now: write `for {positive}`, or `for 0s` for none"
+                ),
             ),
         };
         diags
@@ -73,6 +78,17 @@ pub fn check_duration(e: &Expr, usage: Use, diags: &mut Diagnostics) -> Option<f
             .help("durations are in ms, s or min; check the number and the unit");
     }
     Some(ms)
+}
+
+/// `ms` as the language writes it: `30s`, `500ms`, `2min`.
+fn literal(ms: f64) -> String {
+    if ms >= 60_000.0 && ms % 60_000.0 == 0.0 {
+        format!("{}min", ms / 60_000.0)
+    } else if ms >= 1000.0 && ms % 1000.0 == 0.0 {
+        format!("{}s", ms / 1000.0)
+    } else {
+        format!("{ms}ms")
+    }
 }
 
 fn show(ms: f64) -> String {
