@@ -6,12 +6,13 @@ use mocu_dataserver::{CallOutcome, DataServer, Guid, Topic, Value};
 use mocu_host::{ModuleHost, ModuleSpec, Registry};
 use std::io::{BufRead, BufReader, Write};
 use std::process::{Child, Command, Stdio};
-use std::sync::{Arc, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::Duration;
 
 struct Peer {
     child: Child,
-    lines: Arc<Mutex<Vec<String>>>,
+    /// What the peer printed, and a signal at each new line.
+    lines: Arc<(Mutex<Vec<String>>, Condvar)>,
 }
 
 impl Peer {
@@ -33,12 +34,13 @@ impl Peer {
             .stderr(Stdio::inherit())
             .spawn()
             .expect("starting the pymavlink vehicle");
-        let lines = Arc::new(Mutex::new(Vec::new()));
+        let lines = Arc::new((Mutex::new(Vec::new()), Condvar::new()));
         let out = child.stdout.take().expect("piped stdout");
         let l = lines.clone();
         std::thread::spawn(move || {
             for line in BufReader::new(out).lines().map_while(Result::ok) {
-                l.lock().unwrap().push(line);
+                l.0.lock().unwrap().push(line);
+                l.1.notify_all();
             }
         });
         Peer { child, lines }
@@ -50,8 +52,15 @@ impl Peer {
         stdin.flush().unwrap();
     }
 
-    fn said(&self, prefix: &str) -> Vec<String> {
-        self.lines.lock().unwrap().iter().filter(|l| l.starts_with(prefix)).cloned().collect()
+    /// The lines starting with `prefix` once there are `n` of them (the peer prints what it
+    /// received on its own time: an acknowledged upload may still be on its way to us).
+    fn said_n(&self, prefix: &str, n: usize) -> Vec<String> {
+        let (lock, signal) = &*self.lines;
+        let count = |l: &Vec<String>| l.iter().filter(|l| l.starts_with(prefix)).count();
+        let lines = lock.lock().unwrap();
+        let (lines, _) =
+            signal.wait_timeout_while(lines, Duration::from_secs(30), |l| count(l) < n).unwrap();
+        lines.iter().filter(|l| l.starts_with(prefix)).cloned().collect()
     }
 }
 
@@ -207,7 +216,7 @@ fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
         call(&ds, v, "upload_route", vec![Value::Guid(route)]),
         CallOutcome::Accepted(vec![Value::Int(3)])
     );
-    let items = peer.said("mission_item");
+    let items = peer.said_n("mission_item", 3);
     assert_eq!(items.len(), 3, "{items:?}");
     assert!(items[1].starts_with("mission_item 1 32.717"), "{items:?}");
 

@@ -958,7 +958,9 @@ impl Typer<'_, '_> {
     }
 
     fn lower(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
-        self.lower_node(e, scope)
+        // Nesting up to the depth limit takes ~9 KiB of stack a level in a debug build: more
+        // than a 2 MiB thread has. Grow the stack when less than 64 KiB is left.
+        stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.lower_node(e, scope))
     }
 
     fn lower_node(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
