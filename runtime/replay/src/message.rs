@@ -1,7 +1,7 @@
 //! The messages replay applies, parsed from their JSON (docs/recording.md, "Channels").
 
-use crate::value::{decode, kind};
-use mocu_dataserver::{ObjectInfo, PropMeta, Value};
+use crate::value::decode;
+use mocu_dataserver::{ObjectInfo, PropMeta, Value, ValueKind};
 use serde_json::Value as Json;
 
 /// `/world/object`: an object created, changed or deleted (GUIDs are the recording's).
@@ -60,7 +60,8 @@ fn info(j: &Json) -> Option<ObjectInfo> {
 
 /// Property metadata as written on `created` (`{"kind", "units", …}`).
 pub fn meta(j: &Json) -> PropMeta {
-    let mut m = PropMeta { kind: text(j, "kind").and_then(kind), ..PropMeta::default() };
+    let mut m =
+        PropMeta { kind: text(j, "kind").and_then(ValueKind::parse), ..PropMeta::default() };
     if let Some(u) = text(j, "units") {
         m = m.units(u);
     }

@@ -4,24 +4,9 @@
 use mocu_dataserver::{Guid, Value, ValueKind};
 use serde_json::Value as Json;
 
-/// The kind named in a message (`int`, `float`, …).
-pub fn kind(name: &str) -> Option<ValueKind> {
-    Some(match name {
-        "int" => ValueKind::Int,
-        "float" => ValueKind::Float,
-        "bool" => ValueKind::Bool,
-        "string" => ValueKind::String,
-        "guid" => ValueKind::Guid,
-        "list" => ValueKind::List,
-        "set" => ValueKind::Set,
-        "bytes" => ValueKind::Bytes,
-        _ => return None,
-    })
-}
-
 /// A value of kind `kind` written as `json`.
 pub fn decode(kind_name: &str, json: &Json) -> Option<Value> {
-    Some(match (kind(kind_name)?, json) {
+    Some(match (ValueKind::parse(kind_name)?, json) {
         (ValueKind::Int, j) => Value::Int(j.as_i64()?),
         (ValueKind::Float, Json::String(s)) => Value::Float(match s.as_str() {
             "NaN" => f64::NAN,
