@@ -23,6 +23,7 @@ pub mod diagnostics;
 pub mod docgen;
 pub mod format;
 pub mod fs;
+pub mod incremental;
 pub mod lexer;
 pub mod modules;
 pub mod parser;
@@ -80,20 +81,31 @@ pub fn compile_layout(
 ) -> Program {
     // 1. Parse the file and everything it uses: later passes need all trees.
     let modules = load_sources::load_sources(path, text, loader, sources, diags);
+    compile_modules(&modules, schema, config, diags)
+}
+
+/// The passes of [`compile_layout`] after parsing, over files already parsed (module 0 is the
+/// layout): what [`incremental::ItemCache`] calls with the trees it reused.
+pub fn compile_modules(
+    modules: &Modules,
+    schema: &Schema,
+    config: &Config,
+    diags: &mut Diagnostics,
+) -> Program {
     // 2. Collect top-level names (and duplicates) before resolving any use of them.
-    let defs = collect_definitions::collect_definitions(&modules, diags);
+    let defs = collect_definitions::collect_definitions(modules, diags);
     // 3. Resolve every name; unresolved names are reported here once, so the type pass
     //    can treat them as `{error}` silently.
-    let used = resolve_names::resolve_names(&modules, &defs, diags);
+    let used = resolve_names::resolve_names(modules, &defs, diags);
     // 4. Type and lower to the program; needs resolution and the schema's path types.
-    let mut program = check_types::check_types(&modules, &defs, schema, diags);
-    program.design = check_anchors::check_anchors(&modules, diags);
+    let mut program = check_types::check_types(modules, &defs, schema, diags);
+    program.design = check_anchors::check_anchors(modules, diags);
     // 5. Schema rules need complete, typed paths (after lets are inlined).
     check_schema::check_schema(&program, schema, diags);
     check_method_args::check_method_args(&program, schema, diags);
     check_depth::check_depth(&program, diags);
     // 6. Warnings last: they only make sense on a program that resolved and typed.
-    warn_unused::warn_unused(&modules, &used, diags);
+    warn_unused::warn_unused(modules, &used, diags);
     warn_outside_window::warn_outside_window(&program, config.screen, diags);
     check_anchors::warn_screen_px(&program, diags);
     warn_constant_watch::warn_constant_watch(&program, diags);
