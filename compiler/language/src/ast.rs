@@ -9,12 +9,12 @@ pub struct Ident {
 }
 
 /// One parsed file: its items (broken items are left out and reported).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct File {
     pub items: Vec<Item>,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Item {
     Use(Use),
     Let(Let),
@@ -29,7 +29,7 @@ pub enum Item {
 }
 
 /// `design 1280 x 720`: the screen size the layout's px are written for.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Design {
     pub width: Expr,
     pub height: Expr,
@@ -37,7 +37,7 @@ pub struct Design {
 }
 
 /// `use "path.mocu"` or `use "path.mocu" as ns`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Use {
     pub path: String,
     pub path_span: Span,
@@ -46,7 +46,7 @@ pub struct Use {
 }
 
 /// `let name = expr`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Let {
     pub name: Ident,
     pub value: Expr,
@@ -54,7 +54,7 @@ pub struct Let {
 }
 
 /// `window name { rect … layer … }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Window {
     pub name: Ident,
     pub rect: Option<Vec<Expr>>,
@@ -65,7 +65,7 @@ pub struct Window {
 }
 
 /// `name expr` inside a window, widget or primitive.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Prop {
     pub name: Ident,
     pub value: Expr,
@@ -73,7 +73,7 @@ pub struct Prop {
 }
 
 /// `in window { widget… }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct InBlock {
     pub window: Ident,
     pub widgets: Vec<Widget>,
@@ -81,7 +81,7 @@ pub struct InBlock {
 }
 
 /// `name: Component { at x y w h  param expr …  on event action… }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Widget {
     pub name: Option<Ident>,
     pub component: Ident,
@@ -93,7 +93,7 @@ pub struct Widget {
 }
 
 /// `on event action…`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Handler {
     pub event: Ident,
     pub actions: Vec<Action>,
@@ -101,7 +101,7 @@ pub struct Handler {
 }
 
 /// `component Name(params) { let…  primitive… }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Component {
     pub name: Ident,
     pub params: Vec<Param>,
@@ -109,7 +109,7 @@ pub struct Component {
     pub span: Span,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Param {
     Value { name: Ident, ty: Option<TypeName>, default: Option<Expr> },
     Event { name: Ident },
@@ -123,20 +123,20 @@ impl Param {
     }
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TypeName {
     pub name: Ident,
     pub optional: bool,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Stmt {
     Let(Let),
     Primitive(Primitive),
 }
 
 /// `circle cx cy r  fill c  stroke c …`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Primitive {
     pub kind: Ident,
     pub args: Vec<Expr>,
@@ -145,7 +145,7 @@ pub struct Primitive {
 }
 
 /// `bind gamepad { shift left_bumper  axis left_y … -> action…  mode drive { … } }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Bind {
     pub device: Ident,
     /// `shift NAME`: the input that selects the shift layer.
@@ -157,7 +157,7 @@ pub struct Bind {
     pub span: Span,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Binding {
     /// Written `shift button west -> …`: active only while the shift input is held.
     pub shift: bool,
@@ -170,7 +170,7 @@ pub struct Binding {
 }
 
 /// One option after a binding's input name: a keyword and maybe a number.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct BindingOption {
     pub name: Ident,
     pub value: Option<Expr>,
@@ -178,7 +178,7 @@ pub struct BindingOption {
 }
 
 /// `menu for type "usv" { item "Arm" enabled expr -> action… }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Menu {
     pub object_type: String,
     pub type_span: Span,
@@ -186,7 +186,7 @@ pub struct Menu {
     pub span: Span,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct MenuEntry {
     pub label: Expr,
     pub enabled: Option<Expr>,
@@ -195,7 +195,7 @@ pub struct MenuEntry {
 }
 
 /// `watch name { when cond for 5s clear when cond2 repeat every 30s then action… }`.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Watch {
     pub name: Ident,
     pub when: Expr,
@@ -209,7 +209,7 @@ pub struct Watch {
 }
 
 /// `for each v in root.vehicles of type "usv" { window… in… watch… }`: a per-object template.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Each {
     pub var: Ident,
     pub source: Expr,
@@ -218,13 +218,13 @@ pub struct Each {
     pub span: Span,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Action {
     pub kind: ActionKind,
     pub span: Span,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ActionKind {
     Set {
         target: Expr,
@@ -258,14 +258,14 @@ pub enum ActionKind {
     },
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum SelectTarget {
     Next,
     Prev,
     Object(Expr),
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Expr {
     pub kind: ExprKind,
     pub span: Span,
@@ -308,7 +308,7 @@ pub enum LitUnit {
     Percent,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum ExprKind {
     Number {
         value: f64,
@@ -330,7 +330,7 @@ pub enum ExprKind {
     Error,
 }
 
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum StrPart {
     Text(String),
     Interp { expr: Expr, spec: Option<(String, Span)> },

@@ -12,6 +12,8 @@ use crate::source::{FileId, Span};
 use pest::Parser as _;
 use pest::iterators::{Pair, Pairs};
 
+mod fast;
+
 #[derive(pest_derive::Parser)]
 #[grammar = "grammar.pest"]
 struct Grammar;
@@ -76,6 +78,22 @@ pub fn parse(file: FileId, text: &str, diags: &mut Diagnostics) -> File {
         }
     }
     File { items }
+}
+
+/// One item chunk (`src`, at `offset` in the file) read by the fast parser (parser/fast.rs):
+/// the tree, or `None` where it leaves the item to pest. Where it gives a tree, the tree is
+/// the one [`reference_item`] gives (tests/fast_parser.rs).
+pub fn fast_item(file: FileId, src: &str, offset: usize) -> Option<Item> {
+    fast::parse_item(file, src, offset)
+}
+
+/// One item chunk read by the reference parser (grammar.pest): the tree, or `None` where it
+/// refuses the item (a syntax error, or nesting past the limit).
+pub fn reference_item(file: FileId, src: &str, offset: usize) -> Option<Item> {
+    match parse_item(file, src, offset) {
+        Parsed::Item(item) => Some(*item),
+        _ => None,
+    }
 }
 
 /// What one item chunk parsed to.
@@ -577,7 +595,7 @@ struct Ctx {
 /// The deepest expression tree accepted (E0106): every operator, prefix, field, index, call
 /// and bracket counts one level. Deeper ones are refused instead of risking the stack in the
 /// later, recursive passes; the lexer ([`crate::lexer`]) already refused deep brackets.
-const MAX_DEPTH: usize = 256;
+pub(crate) const MAX_DEPTH: usize = 256;
 
 impl Ctx {
     fn span(&self, p: &Pair<Rule>) -> Span {
