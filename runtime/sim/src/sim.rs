@@ -1,6 +1,7 @@
 //! The simulator: its world, its publication in the DataServer, its methods and its module.
 
-use crate::camera;
+use crate::camera::{self, Lens, Pose};
+use crate::manipulator::Manipulator;
 use crate::rng::Rng;
 use crate::vehicle::{Camera, Guidance, Vehicle, VehicleKind};
 use mocu_dataserver::{
@@ -50,8 +51,8 @@ impl Default for SimConfig {
             appear_every: 0.5,
             rate_hz: 20.0,
             camera_fps: 10.0,
-            camera_width: 64,
-            camera_height: 48,
+            camera_width: 640,
+            camera_height: 480,
             origin: (32.7100, -117.2400),
             autostart: true,
             names: Vec::new(),
@@ -87,16 +88,20 @@ impl SimConfig {
         if !(cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0) {
             return Err(format!("module `{}`: `rate_hz` must be in (0, 1000]", spec.name));
         }
-        if cfg.camera_width == 0
-            || cfg.camera_height == 0
-            || cfg.camera_width > 1024
-            || cfg.camera_height > 1024
+        if !(1..=MAX_CAMERA.0).contains(&cfg.camera_width)
+            || !(1..=MAX_CAMERA.1).contains(&cfg.camera_height)
         {
-            return Err(format!("module `{}`: camera size must be 1..=1024", spec.name));
+            return Err(format!(
+                "module `{}`: camera size must be 1..={} x 1..={}",
+                spec.name, MAX_CAMERA.0, MAX_CAMERA.1
+            ));
         }
         Ok(cfg)
     }
 }
+
+/// The largest simulated camera picture (`camera_width`, `camera_height`).
+pub const MAX_CAMERA: (u32, u32) = (1920, 1080);
 
 /// The `vehicles` setting: names, each starting with its type, none twice.
 fn names(spec: &ModuleSpec) -> Result<Vec<String>, String> {
@@ -237,19 +242,24 @@ impl Sim {
             );
             let noise = w.rng.unit();
             v.step(dt, goal, noise);
+            if let Some(m) = &mut v.manipulator {
+                m.step(dt);
+                m.publish(ds);
+            }
             publish(ds, v, origin);
+            let pose =
+                Pose { heading: v.heading, pitch: v.pitch, roll: v.roll, pan: 0.0, tilt: 0.0 };
+            let head = Pose { pan: v.pan, tilt: v.tilt, ..pose };
             for c in &mut v.cameras {
                 if fps > 0.0 && time + 1e-9 >= c.next_due {
                     c.next_due += 1.0 / fps;
                     c.frames += 1;
                     let _ = ds.set(c.listener, "frames", Value::Int(c.frames as i64));
                     if ds.receivers(c.listener).is_ok_and(|r| !r.is_empty()) {
-                        let tint = match v.kind {
-                            VehicleKind::Usv => [20, 60, 120],
-                            VehicleKind::Ugv => [110, 90, 50],
-                            VehicleKind::Uav => [60, 120, 60],
-                        };
-                        let px = camera::render(cw, ch, v.heading, v.pitch, c.frames, tint);
+                        let r = c
+                            .renderer
+                            .get_or_insert_with(|| camera::Renderer::new(cw, ch, c.lens, v.kind));
+                        let px = r.render(if c.lens == Lens::Payload { head } else { pose });
                         let _ = ds.send(
                             c.listener,
                             vec![
@@ -278,29 +288,40 @@ impl Sim {
         let nav = ds.create_object(guid, ObjectInfo::new("nav", "nav"))?;
         let cams = ds.create_object(guid, ObjectInfo::new("cameras", "cameras"))?;
         let mut cameras = Vec::new();
-        let names: &[&'static str] =
-            if kind == VehicleKind::Uav { &["drive", "payload"] } else { &["drive"] };
-        for &cname in names {
+        // Every vehicle has a drive camera and a payload camera on a pan/tilt head.
+        let (pan, tilt) = if kind == VehicleKind::Uav { (0.0, -30.0) } else { (30.0, -2.0) };
+        for (cname, lens) in [("drive", Lens::Drive), ("payload", Lens::Payload)] {
             let l = ds.create_listener(cams, cname)?;
-            world::create_props(
-                ds,
-                l,
-                vec![
-                    ("width", Value::Int(w.cfg.camera_width as i64), int("px")),
-                    ("height", Value::Int(w.cfg.camera_height as i64), int("px")),
-                    ("fps", Value::Float(w.cfg.camera_fps), float("Hz")),
-                    ("frames", Value::Int(0), int("frames")),
-                    ("format", Value::str("rgb8"), string()),
-                ],
-            )?;
-            cameras.push(Camera { listener: l, frames: 0, next_due: w.time });
+            let mut props = vec![
+                ("width", Value::Int(w.cfg.camera_width as i64), int("px")),
+                ("height", Value::Int(w.cfg.camera_height as i64), int("px")),
+                ("fps", Value::Float(w.cfg.camera_fps), float("Hz")),
+                ("frames", Value::Int(0), int("frames")),
+                ("format", Value::str("rgb8"), string()),
+                (
+                    "fov",
+                    Value::Float(lens.fov()),
+                    float("deg").describe("horizontal field of view"),
+                ),
+            ];
+            if lens == Lens::Payload {
+                props.push(("pan", Value::Float(pan), float_in("deg", -180.0, 180.0)));
+                props.push(("tilt", Value::Float(tilt), float_in("deg", -90.0, 30.0)));
+            }
+            world::create_props(ds, l, props)?;
+            cameras.push(Camera { listener: l, lens, frames: 0, next_due: w.time, renderer: None });
         }
+        let manipulator =
+            if kind == VehicleKind::Ugv { Some(Manipulator::create(ds, guid)?) } else { None };
         let v = Vehicle {
             name: name.to_string(),
             kind,
             guid,
             nav,
             cameras,
+            pan,
+            tilt,
+            manipulator,
             x,
             y,
             alt: 0.0,
@@ -374,6 +395,7 @@ impl Sim {
         let square = [(x + r, y), (x + r, y + r), (x, y + r), (x, y)];
         let patrol = world::create_route(ds, ex, routes, "patrol", frame, &square)?;
         self.publish_methods(guid)?;
+        self.publish_part_methods(&v)?;
         let mut v = v;
         let first_of_kind = !w.vehicles.iter().any(|o| o.kind == kind);
         if w.cfg.autostart && first_of_kind {
@@ -524,6 +546,51 @@ impl Sim {
         Ok(())
     }
 
+    /// The payload head's `point_payload(pan, tilt)` and, on a UGV, its manipulator's
+    /// `move_joints(shoulder, elbow, wrist)`, `grip(close)` and `stow()`.
+    fn publish_part_methods(&self, v: &Vehicle) -> Result<(), DsError> {
+        use ValueKind::{Bool, Float};
+        let p = ParamSpec::new;
+        let spec = MethodSpec::new("point_payload").param(p("pan", Float)).param(p("tilt", Float));
+        self.method(v.guid, spec, |sim, v, a| {
+            let (pan, tilt) =
+                (a[0].as_f64().unwrap_or(f64::NAN), a[1].as_f64().unwrap_or(f64::NAN));
+            if !(-180.0..=180.0).contains(&pan) || !(-90.0..=30.0).contains(&tilt) {
+                return CallOutcome::Refused(format!(
+                    "pan {pan}° tilt {tilt}°: the head turns -180..180° and tilts -90..30°"
+                ));
+            }
+            (v.pan, v.tilt) = (pan, tilt);
+            if let Some(c) = v.cameras.iter().find(|c| c.lens == Lens::Payload) {
+                let _ = sim.ctx.ds.set(c.listener, "pan", Value::Float(pan));
+                let _ = sim.ctx.ds.set(c.listener, "tilt", Value::Float(tilt));
+            }
+            CallOutcome::Accepted(vec![])
+        })?;
+        let Some(m) = v.manipulator.as_ref().map(|m| m.object) else { return Ok(()) };
+        let part = |v: &mut Vehicle, f: &dyn Fn(&mut Manipulator) -> CallOutcome| match &mut v
+            .manipulator
+        {
+            Some(m) => f(m),
+            None => CallOutcome::NoSuchObject,
+        };
+        let mut spec = MethodSpec::new("move_joints");
+        for (name, _, _) in crate::manipulator::JOINTS {
+            spec = spec.param(p(name, Float));
+        }
+        self.method_on(m, v.guid, spec, move |_, v, a| part(v, &|m| m.move_joints(a)))?;
+        self.method_on(
+            m,
+            v.guid,
+            MethodSpec::new("grip").param(p("close", Bool)),
+            move |_, v, a| {
+                let close = a[0].as_bool().unwrap_or(false);
+                part(v, &|m| m.grip(close))
+            },
+        )?;
+        self.method_on(m, v.guid, MethodSpec::new("stow"), move |_, v, _| part(v, &|m| m.stow()))
+    }
+
     /// Publishes a vehicle method whose handler runs on the simulator's executor with the
     /// world locked, then republishes the vehicle. (The call and its outcome are recorded
     /// once, by whoever made the call: the layout's `--log` record, the `--record` feed.)
@@ -533,16 +600,30 @@ impl Sim {
         spec: MethodSpec,
         f: impl Fn(&Sim, &mut Vehicle, &[Value]) -> CallOutcome + Send + Sync + 'static,
     ) -> Result<(), DsError> {
+        self.method_on(guid, guid, spec, f)
+    }
+
+    /// [`Sim::method`] on `object`, a part of `vehicle` (its manipulator).
+    fn method_on(
+        &self,
+        object: Guid,
+        vehicle: Guid,
+        spec: MethodSpec,
+        f: impl Fn(&Sim, &mut Vehicle, &[Value]) -> CallOutcome + Send + Sync + 'static,
+    ) -> Result<(), DsError> {
         let sim = self.clone();
-        self.ctx.ds.publish_method_on(&self.ctx.executor, guid, spec, move |call: Call| {
+        self.ctx.ds.publish_method_on(&self.ctx.executor, object, spec, move |call: Call| {
             let mut w = sim.world.lock();
             let origin = w.cfg.origin;
-            let Some(v) = w.vehicles.iter_mut().find(|v| v.guid == call.object) else {
+            let Some(v) = w.vehicles.iter_mut().find(|v| v.guid == vehicle) else {
                 call.responder.reply(CallOutcome::NoSuchObject);
                 return;
             };
             let outcome = f(&sim, v, &call.args);
             publish(&sim.ctx.ds, v, origin);
+            if let Some(m) = &v.manipulator {
+                m.publish(&sim.ctx.ds);
+            }
             drop(w);
             call.responder.reply(outcome);
         })

@@ -80,8 +80,11 @@ pub(crate) enum Guidance {
 
 pub(crate) struct Camera {
     pub listener: Guid,
+    pub lens: crate::camera::Lens,
     pub frames: u64,
     pub next_due: f64,
+    /// Made on the first frame someone receives (its scene is drawn once).
+    pub renderer: Option<crate::camera::Renderer>,
 }
 
 pub(crate) struct Vehicle {
@@ -90,6 +93,11 @@ pub(crate) struct Vehicle {
     pub guid: Guid,
     pub nav: Guid,
     pub cameras: Vec<Camera>,
+    /// The payload camera's head: pan (deg, right of the bow) and tilt (deg, up).
+    pub pan: f64,
+    pub tilt: f64,
+    /// The manipulator of a UGV.
+    pub manipulator: Option<crate::manipulator::Manipulator>,
     pub x: f64,
     pub y: f64,
     pub alt: f64,

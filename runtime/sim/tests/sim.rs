@@ -241,8 +241,8 @@ fn camera_frames_flow_through_the_listener() {
     ds.quiesce();
     let frames = got.lock().unwrap().clone();
     assert!(frames.len() >= 9 && frames.len() <= 11, "10 fps for 1 s: {}", frames.len());
-    assert_eq!(frames[0].0, 64 * 48 * 3);
-    assert_eq!((frames[0].1, frames[0].2), (64, 48));
+    assert_eq!(frames[0].0, 640 * 480 * 3, "640x480 RGB by default");
+    assert_eq!((frames[0].1, frames[0].2), (640, 480));
     assert!(frames.windows(2).all(|w| w[1].3 == w[0].3 + 1), "in order, none lost");
     assert_eq!(ds.get(cam, "frames").unwrap(), Value::Int(*frames.last().map(|f| &f.3).unwrap()));
 }
@@ -298,4 +298,76 @@ fn telemetry_declares_the_step_rate_and_operator_goals_do_not() {
     }
     assert_eq!(ds.meta(nav, "goal_throttle").unwrap().rate_hz, None);
     assert_eq!(ds.meta(usv, "name").unwrap().rate_hz, None);
+}
+
+/// The camera size is a module setting; past 1920x1080 it is refused with the limits.
+#[test]
+fn the_camera_size_is_a_setting_within_limits() {
+    let spec =
+        mocu_host::ModuleSpec::new("sim").with("camera_width", 320).with("camera_height", 240);
+    let cfg = SimConfig::from_spec(&spec).unwrap();
+    assert_eq!((cfg.camera_width, cfg.camera_height), (320, 240));
+    let (ds, s) = sim(SimConfig { camera_width: 320, camera_height: 240, ..quiet() });
+    s.step(0.05);
+    let cam = ds.resolve(&["vehicles", "usv1", "cameras", "payload"]).unwrap();
+    assert_eq!(ds.get(cam, "width").unwrap(), Value::Int(320));
+    let big = mocu_host::ModuleSpec::new("sim").with("camera_width", 4000);
+    assert!(SimConfig::from_spec(&big).unwrap_err().contains("1..=1920"));
+}
+
+/// Every vehicle has a payload camera on a head of its own: `point_payload` turns it
+/// (published as the camera's `pan` and `tilt`) and refuses what the head cannot reach.
+#[test]
+fn the_payload_head_is_pointed_by_its_method() {
+    let (ds, s) = sim(quiet());
+    run(&s, 2.0);
+    for name in ["usv1", "ugv1", "uav1"] {
+        assert!(ds.resolve(&["vehicles", name, "cameras", "payload"]).is_some(), "{name}");
+    }
+    let usv = v(&ds, "usv1");
+    let cam = ds.resolve(&["vehicles", "usv1", "cameras", "payload"]).unwrap();
+    let out = call(&ds, usv, "point_payload", vec![Value::Float(-45.0), Value::Float(-10.0)]);
+    assert!(out.is_accepted(), "{out:?}");
+    assert_eq!(ds.get(cam, "pan").unwrap(), Value::Float(-45.0));
+    assert_eq!(ds.get(cam, "tilt").unwrap(), Value::Float(-10.0));
+    let out = call(&ds, usv, "point_payload", vec![Value::Float(0.0), Value::Float(60.0)]);
+    assert!(matches!(&out, CallOutcome::Refused(r) if r.contains("tilts -90..30")), "{out:?}");
+}
+
+/// The UGV's manipulator: joints and gripper published, moved by its methods at a limited
+/// rate (so `moving` shows while they travel), goals outside a joint's range refused.
+#[test]
+fn the_ugv_manipulator_moves_its_joints_and_gripper_toward_their_goals() {
+    let (ds, s) = sim(quiet());
+    run(&s, 2.0);
+    assert!(ds.resolve(&["vehicles", "usv1", "manipulator"]).is_none(), "only UGVs have one");
+    let m = ds.resolve(&["vehicles", "ugv1", "manipulator"]).unwrap();
+    let get = |p: &str| ds.get(m, p).unwrap();
+    assert_eq!(get("shoulder"), Value::Float(35.0));
+    assert_eq!(get("gripper_state"), Value::str("open"));
+    let out = call(
+        &ds,
+        m,
+        "move_joints",
+        vec![Value::Float(65.0), Value::Float(70.0), Value::Float(0.0)],
+    );
+    assert!(out.is_accepted(), "{out:?}");
+    let out = call(&ds, m, "grip", vec![Value::Bool(true)]);
+    assert!(out.is_accepted(), "{out:?}");
+    s.step(0.5);
+    ds.quiesce();
+    assert_eq!(get("shoulder"), Value::Float(50.0), "30 deg/s for 0.5 s");
+    assert_eq!(get("moving"), Value::Bool(true));
+    assert_eq!(get("gripper_state"), Value::str("moving"));
+    run(&s, 2.0);
+    ds.quiesce();
+    assert_eq!((get("shoulder"), get("wrist")), (Value::Float(65.0), Value::Float(0.0)));
+    assert_eq!((get("moving"), get("gripper_state")), (Value::Bool(false), Value::str("closed")));
+    let out =
+        call(&ds, m, "move_joints", vec![Value::Float(95.0), Value::Float(0.0), Value::Float(0.0)]);
+    assert!(matches!(&out, CallOutcome::Refused(r) if r.contains("shoulder 95")), "{out:?}");
+    assert!(call(&ds, m, "stow", vec![]).is_accepted());
+    run(&s, 5.0);
+    ds.quiesce();
+    assert_eq!(get("elbow"), Value::Float(0.0));
 }
