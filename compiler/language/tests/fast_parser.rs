@@ -6,8 +6,10 @@
 mod common;
 
 use common::{NESTERS, TOKENS, corpus, floor_boundary};
-use mocu_language::FileId;
-use mocu_language::parser::{ChunkKind, fast_item, reference_item, split_items};
+use mocu_language::parser::{
+    ChunkKind, ParseCounts, fast_item, parse_counted, reference_item, split_items,
+};
+use mocu_language::{Diagnostics, FileId};
 use proptest::prelude::*;
 
 #[path = "../../../benches/common/layout_corpus.rs"]
@@ -58,6 +60,35 @@ fn fast_parser_reads_every_item_of_the_shipped_layouts_and_stdlib() {
         let (fast, all) = same_trees(text);
         assert_eq!(fast, all, "items left to pest in\n{text}");
     }
+}
+
+#[test]
+fn parse_takes_the_fast_path_for_every_item_of_the_shipped_layouts() {
+    let mut texts = Vec::new();
+    common::walk(std::path::Path::new("../../layouts"), &mut texts);
+    common::walk(std::path::Path::new("../../stdlib"), &mut texts);
+    let mut total = ParseCounts::default();
+    for text in &texts {
+        let mut diags = Diagnostics::new();
+        let (tree, counts) = parse_counted(FileId(0), text, &mut diags);
+        assert!(!diags.has_errors(), "{:?}", diags.iter().next());
+        assert_eq!(counts.fast, tree.items.len());
+        total.fast += counts.fast;
+        total.reference += counts.reference;
+    }
+    assert_eq!(total.reference, 0, "items of the shipped layouts parsed by pest");
+    assert!(total.fast > 50, "only {} items", total.fast);
+}
+
+#[test]
+fn parse_leaves_a_broken_item_to_pest_and_reads_the_rest_fast() {
+    let text = "let a = 1\nwindow w { rect 0 0 }\nlet b = a + 1\n";
+    let mut diags = Diagnostics::new();
+    let (tree, counts) = parse_counted(FileId(0), text, &mut diags);
+    assert_eq!(counts, ParseCounts { fast: 2, reference: 1 });
+    assert_eq!(tree.items.len(), 2);
+    let first = diags.iter().next().map(|d| d.message.clone()).unwrap_or_default();
+    assert!(first.starts_with("expected"), "pest's message: {first}");
 }
 
 #[test]
