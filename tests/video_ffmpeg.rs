@@ -46,11 +46,12 @@ fn one_ffmpeg_stream_shows_in_two_windows() {
     let (mut rx, cam, port) = receiver(&ds);
     let (sw, sh) = (900u32, 600u32);
     let display = mocu_display::ensure_display_object(&ds, sw, sh).unwrap();
-    // A 4:3 window and a tall one (letterboxed: the picture keeps its aspect ratio).
+    // A 4:3 window and a tall one (letterboxed, as asked: the picture keeps its aspect ratio).
     let ra = Rect::new(0.0, 0.0, 480.0, 360.0);
     let rb = Rect::new(560.0, 60.0, 300.0, 500.0);
     let a = window(&ds, display, "a", ra);
     let b = window(&ds, display, "b", rb);
+    ds.set(b, "fit", Value::str("contain")).unwrap();
     let windows = VideoWindows::start(&ds).unwrap();
     let mut d = Display::new(&ds, DisplayOptions::new(sw, sh).backend(BackendChoice::Cpu)).unwrap();
     let _ff = Ffmpeg::stream(Kind::RtpH264, 640, 480, port, 10);
@@ -175,11 +176,11 @@ fn mocu_run_shows_a_live_ffmpeg_stream_in_the_usv_layout() {
         .unwrap()
         .stdout;
     assert_eq!(raw.len(), 1280 * 720 * 4, "a 1280x720 screenshot");
-    // The video window is the whole screen: a 4:3 picture 960 px wide, centred. The
+    // The video window is the whole screen: a 4:3 picture 1280 px wide filling it, its top
+    // and bottom cropped. The
     // points checked lie clear of the HUD (status header, heading tape, gauges, buttons)
     // and the map: the bars below the tape, clear of the "2" of the timer.
-    let c =
-        fit_rect(Size::new(640.0, 480.0), Rect::new(0.0, 0.0, 1280.0, 720.0), ImageFit::Contain);
+    let c = fit_rect(Size::new(640.0, 480.0), Rect::new(0.0, 0.0, 1280.0, 720.0), ImageFit::Cover);
     let clear_of_the_hud: &[((f32, f32), [u8; 3], &str)] = &[
         ((120.0 / 640.0, 200.0 / 480.0), [0, 255, 255], "cyan"),
         ((200.0 / 640.0, 200.0 / 480.0), [255, 0, 255], "magenta"),

@@ -37,6 +37,7 @@
 
 #![forbid(unsafe_code)]
 
+mod chrome;
 mod clock;
 pub mod codec;
 mod frame;

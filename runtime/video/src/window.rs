@@ -1,8 +1,15 @@
 //! The video painter: claims every window of subtype `video` under `root.display`, shows
 //! the camera its `source` property names (a dotted path text), scaled with its aspect
-//! ratio kept, and marks a stalled stream: its last frame with `STALE` after
-//! [`WindowsConfig::stale_after`], then `NO VIDEO` after [`WindowsConfig::no_video_after`]
-//! (or when there is no stream at all).
+//! ratio kept — filling the window (cropped, centred) unless the window or its `Video`
+//! widget asks for `fit "contain"` (letterboxed) — under a frame of its own (`chrome.rs`: a
+//! border, the camera and vehicle, the fps and latency), and marks a stalled stream: its
+//! last frame with `STALE` after [`WindowsConfig::stale_after`], then "no video from
+//! <camera>" after [`WindowsConfig::no_video_after`] (or when there is no stream at all).
+//! Ages are read on the DataServer's clock (a test's `ManualClock` moves them).
+//!
+//! A left press (a tap) on a video window raises the `press` event of the visible widgets
+//! placed in it under the pointer (fig. 1: the small payload view swaps into the large
+//! place).
 //!
 //! Each camera is joined once, however many windows show it (`Overflow::DropOldest`, a
 //! queue of 2: the display never lags behind the camera); each frame is turned into an
@@ -15,7 +22,7 @@
 //! is live (a frame in the last 1.5 s): windows whose source is the vehicle camera show the
 //! network stream, and go back to the vehicle camera's own frames when it stops.
 
-use crate::codec::Meter;
+use crate::chrome::{self, Chrome};
 use crate::frame::FrameMsg;
 use crate::{normalize_path, now_us, resolve_path};
 use mocu_dataserver::{
@@ -23,12 +30,11 @@ use mocu_dataserver::{
     ParamSpec, Subject, SubscriptionId, Topic, Value,
 };
 use mocu_display::{
-    Align, Baseline, Brush, Canvas, Color, Image, ImageFit, PaintArgs, Point, Rect, Size,
-    TextStyle, claim_window, fit_rect, invalidate,
+    Canvas, Color, Image, ImageFit, PaintArgs, Rect, Size, claim_window, fit_rect, invalidate,
 };
 use mocu_value::PropName;
 use parking_lot::Mutex;
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 use std::sync::{Arc, Weak};
 use std::time::{Duration, Instant};
 
@@ -101,6 +107,7 @@ struct Win {
     camera: Option<Guid>,
     status: Status,
     shown: Option<Shown>,
+    fit: ImageFit,
     /// The camera's latest frame scaled once to where it lands in the window (its frame
     /// number, the image): painted pixel for pixel, no resampling on the display's thread.
     scaled: Option<(i64, Image)>,
@@ -110,10 +117,19 @@ struct Cam {
     receiver: Guid,
     assoc: Guid,
     latest: Option<Latest>,
-    meter: Meter,
-    painted_frames: u32,
+    /// When the frames of the last second arrived (the DataServer's clock).
+    arrivals: VecDeque<Instant>,
     latency_ms: Option<f64>,
 }
+
+impl Cam {
+    /// Frames received in the second before `now`.
+    fn fps(&self, now: Instant) -> f64 {
+        self.arrivals.iter().filter(|t| now.saturating_duration_since(**t) < SECOND).count() as f64
+    }
+}
+
+const SECOND: Duration = Duration::from_secs(1);
 
 #[derive(Clone)]
 struct Latest {
@@ -219,6 +235,7 @@ impl Shared {
                         camera: None,
                         status: Status::NoVideo,
                         shown: None,
+                        fit: ImageFit::Cover,
                         scaled: None,
                     },
                 );
@@ -228,6 +245,7 @@ impl Shared {
                         sh.paint(g, c, a);
                     }
                 });
+                chrome::publish_press(&self.ds, g);
                 self.tick();
             }
             Kind::Deleted => {
@@ -251,11 +269,12 @@ impl Shared {
         let feeds = network_feeds(ds, self.cfg.feed_live);
         let mut choices = Vec::with_capacity(wins.len());
         for (g, source) in wins {
-            choices.push((g, choose_camera(ds, &source, &feeds), source));
+            choices.push((g, choose_camera(ds, &source, &feeds), source, chrome::fit_of(ds, g)));
         }
+        let now = ds.now();
         let mut repaint = Vec::new();
         let mut st = self.state.lock();
-        for (g, cam, source) in choices {
+        for (g, cam, source, fit) in choices {
             if let Some(cam) = cam
                 && !st.cameras.contains_key(&cam)
                 && let Some(c) = self.join(cam)
@@ -265,13 +284,15 @@ impl Shared {
             let cam = cam.filter(|c| st.cameras.contains_key(c));
             let status = match cam.and_then(|c| st.cameras[&c].latest.as_ref()) {
                 None => Status::NoVideo,
-                Some(l) => self.status_of(l.received.elapsed()),
+                Some(l) => self.status_of(now.saturating_duration_since(l.received)),
             };
             let Some(w) = st.windows.get_mut(&g) else { continue };
-            if w.camera != cam || w.status != status || w.source != source {
+            if w.camera != cam || w.status != status || w.source != source || w.fit != fit {
                 w.camera = cam;
                 w.status = status;
                 w.source = source;
+                w.fit = fit;
+                w.scaled = None;
                 repaint.push(g);
             }
         }
@@ -287,10 +308,11 @@ impl Shared {
         // Shown statistics, on the camera objects.
         let mut stats = Vec::new();
         for (g, cam) in st.cameras.iter_mut() {
-            let painted = std::mem::take(&mut cam.painted_frames);
-            if cam.meter.tick(painted) {
-                stats.push((*g, cam.meter.fps, cam.latency_ms));
+            while cam.arrivals.front().is_some_and(|t| now.saturating_duration_since(*t) >= SECOND)
+            {
+                cam.arrivals.pop_front();
             }
+            stats.push((*g, cam.fps(now), cam.latency_ms));
         }
         drop(st);
         for c in left {
@@ -298,7 +320,7 @@ impl Shared {
             let _ = ds.delete_object(c.receiver);
         }
         for (g, fps, lat) in stats {
-            let _ = ds.set(g, "shown_fps", Value::Float((fps * 10.0).round() / 10.0));
+            let _ = ds.set(g, "shown_fps", Value::Float(fps));
             if let Some(l) = lat {
                 let _ = ds.set(g, "shown_latency_ms", Value::Float((l * 10.0).round() / 10.0));
             }
@@ -352,8 +374,7 @@ impl Shared {
                 receiver,
                 assoc,
                 latest: None,
-                meter: Meter::default(),
-                painted_frames: 0,
+                arrivals: VecDeque::new(),
                 latency_ms: None,
             }),
             Err(_) => {
@@ -380,11 +401,16 @@ impl Shared {
         // Scaled here, once per window size, rather than resampled in each paint.
         let scaled: Vec<(Guid, Option<Image>)> =
             showing.iter().map(|g| (*g, self.scale_for(*g, &image))).collect();
-        let latest = Latest { image, frame, arrival_us: f.arrival_us, received: Instant::now() };
+        let received = self.ds.now();
+        let latest = Latest { image, frame, arrival_us: f.arrival_us, received };
         let windows: Vec<Guid> = {
             let mut st = self.state.lock();
             let Some(cam) = st.cameras.get_mut(&camera) else { return };
             cam.latest = Some(latest);
+            cam.arrivals.push_back(received);
+            if cam.arrivals.len() > 240 {
+                cam.arrivals.pop_front();
+            }
             let mut ws = Vec::new();
             for (g, w) in st.windows.iter_mut() {
                 if w.camera == Some(camera) {
@@ -401,26 +427,28 @@ impl Shared {
         }
     }
 
-    /// `image` scaled to the rectangle it is shown in within window `g` (kept whole, centred:
-    /// [`picture_at`]) when that rectangle has whole-pixel sides and corner.
+    /// `image` scaled to the rectangle it is shown in within window `g` (centred, whole or
+    /// cropped: [`picture_at`]) when that rectangle has whole-pixel sides and corner.
     fn scale_for(&self, g: Guid, image: &Image) -> Option<Image> {
         let n = |k: &str| self.ds.try_get(g, PropName::new(k)).and_then(|v| v.as_f64());
         let (w, h) = (n("w")? as f32, n("h")? as f32);
-        let r = picture_at(image, Rect::new(0.0, 0.0, w, h))?;
+        let fit = self.state.lock().windows.get(&g).map_or(ImageFit::Cover, |w| w.fit);
+        let r = picture_at(image, Rect::new(0.0, 0.0, w, h), fit)?;
         image.scaled(r.w as u32, r.h as u32)
     }
 
     fn paint(&self, window: Guid, c: &mut dyn Canvas, _a: &PaintArgs) {
         let size = c.size();
         let full = Rect::new(0.0, 0.0, size.w, size.h);
-        let (latest, status, source, scaled) = {
+        let now = self.ds.now();
+        let (latest, status, source, scaled, fit, stats) = {
             let mut st = self.state.lock();
             let Some(w) = st.windows.get(&window) else { return };
-            let (cam, source) = (w.camera, w.source.clone());
+            let (cam, source, fit) = (w.camera, w.source.clone(), w.fit);
             let latest = cam.and_then(|g| st.cameras.get(&g)).and_then(|c| c.latest.clone());
             let status = match &latest {
                 None => Status::NoVideo,
-                Some(l) => self.status_of(l.received.elapsed()),
+                Some(l) => self.status_of(now.saturating_duration_since(l.received)),
             };
             let shown = Shown {
                 frame: latest.as_ref().filter(|_| status != Status::NoVideo).map(|l| l.frame),
@@ -439,71 +467,52 @@ impl Shared {
             if first_paint
                 && status == Status::Live
                 && let Some(cam) = cam.and_then(|g| st.cameras.get_mut(&g))
+                && let Some(t) = shown.arrival_us
             {
-                cam.painted_frames += 1;
-                if let Some(t) = shown.arrival_us {
-                    cam.latency_ms = Some((now_us() - t) as f64 / 1000.0);
-                }
+                cam.latency_ms = Some((now_us() - t) as f64 / 1000.0);
             }
+            let stats = cam.and_then(|g| st.cameras.get(&g)).map(|c| (c.fps(now), c.latency_ms));
             let scaled = st.windows.get(&window).and_then(|w| w.scaled.clone());
-            (latest, status, source, scaled)
+            (latest, status, source, scaled, fit, stats)
         };
         c.fill_rect(full, BLACK);
         if let (Some(l), true) = (&latest, status != Status::NoVideo) {
             // The frame scaled when it arrived, when it is this frame at this size.
-            let at = picture_at(&l.image, full);
+            let at = picture_at(&l.image, full, fit);
             let ready = scaled.filter(|(f, img)| {
                 *f == l.frame
                     && at.is_some_and(|r| (r.w, r.h) == (img.width() as f32, img.height() as f32))
             });
+            c.save();
+            c.clip_rect(full);
             match (ready, at) {
                 (Some((_, img)), Some(r)) => c.draw_image(&img, r, ImageFit::Stretch, 1.0),
-                _ => c.draw_image(&l.image, full, ImageFit::Contain, 1.0),
+                _ => c.draw_image(&l.image, full, fit, 1.0),
             }
+            c.restore();
         }
+        let chrome = Chrome::of(&source);
+        let live = status != Status::NoVideo;
+        chrome.draw(c, full, if live { stats } else { None });
         match status {
             Status::Live => {}
-            Status::Stale => badge(c, full, "STALE", Color::rgb(0xf5, 0x9e, 0x0b)),
-            Status::NoVideo => {
-                let dim = Color::rgb(0x8f, 0xa3, 0xb5);
-                let big = (size.h / 10.0).clamp(10.0, 36.0);
-                let mid = Point::new(size.w / 2.0, size.h / 2.0);
-                let style =
-                    TextStyle::new(big, dim).align(Align::Center).baseline(Baseline::Middle);
-                c.draw_text("NO VIDEO", mid, &style.bold());
-                if !source.is_empty() && size.h > 60.0 {
-                    let small = TextStyle::new((big * 0.45).max(9.0), dim)
-                        .align(Align::Center)
-                        .baseline(Baseline::Top);
-                    c.draw_text(&source, Point::new(mid.x, mid.y + big * 0.8), &small);
-                }
-            }
+            Status::Stale => chrome::badge(c, full, "STALE", Color::rgb(0xf5, 0x9e, 0x0b)),
+            Status::NoVideo => chrome.no_video(c, full),
         }
     }
 }
 
-/// Where `image` is shown in `full` (kept whole, centred: `ImageFit::Contain`), when that
-/// rectangle lies on whole pixels — where a copy scaled to its size is drawn pixel for
-/// pixel.
-fn picture_at(image: &Image, full: Rect) -> Option<Rect> {
+/// Where `image` is shown in `full` (centred, aspect kept: whole with `Contain`, cropped
+/// with `Cover`), when that rectangle lies on whole pixels — where a copy scaled to its size
+/// is drawn pixel for pixel.
+fn picture_at(image: &Image, full: Rect, fit: ImageFit) -> Option<Rect> {
     let size = Size::new(image.width() as f32, image.height() as f32);
-    let r = fit_rect(size, full, ImageFit::Contain);
+    let r = fit_rect(size, full, fit);
     let whole = |v: f32| v.fract() == 0.0;
     (r.w >= 1.0 && r.h >= 1.0 && [r.x, r.y, r.w, r.h].into_iter().all(whole)).then_some(r)
 }
 
-/// A label in the top-left corner of the picture.
-fn badge(c: &mut dyn Canvas, r: Rect, text: &str, color: Color) {
-    let size = (r.h / 14.0).clamp(10.0, 24.0);
-    let style = TextStyle::new(size, Color::rgb(0x10, 0x10, 0x10)).bold().baseline(Baseline::Top);
-    let m = c.measure_text(text, &style);
-    let pad = size * 0.4;
-    let bg = Rect::new(r.x + pad, r.y + pad, m.width + 2.0 * pad, size * 1.3 + pad);
-    c.fill_rounded_rect(bg, 3.0, &Brush::Solid(color));
-    c.draw_text(text, Point::new(bg.x + pad, bg.y + pad * 0.6), &style);
-}
-
-fn text_prop(ds: &DataServer, g: Guid, name: &str) -> String {
+pub(crate) fn text_prop(ds: &DataServer, g: Guid, name: &str) -> String {
     match ds.try_get(g, PropName::new(name)) {
         Some(Value::Str(s)) => s.to_string(),
         _ => String::new(),

@@ -39,13 +39,24 @@ pub fn draw_native(
         return;
     }
     let label = match component {
-        "Video" => {
-            format!("NO VIDEO  {}", props.get("source").map(|v| v.to_string()).unwrap_or_default())
-        }
+        "Video" => format!("no video from {}", camera_name(props.get("source"))),
         other => other.to_string(),
     };
     let style = TextStyle::new(12.0, theme::DIM).align(Align::Center).baseline(Baseline::Middle);
     c.draw_text(&label, Point::new(b.w / 2.0, b.h / 2.0), &style);
+}
+
+/// A `Video` widget's camera for the operator: "usv1 drive camera" for
+/// `root.vehicles.usv1.cameras.drive`, never the raw path (the video painter names it alike).
+fn camera_name(source: Option<&Value>) -> String {
+    let text = source.map(|v| v.to_string()).unwrap_or_default();
+    let segs: Vec<&str> = text.trim_matches('"').split('.').filter(|s| !s.is_empty()).collect();
+    let vehicle = segs.iter().position(|s| *s == "vehicles").and_then(|i| segs.get(i + 1));
+    match (vehicle, segs.last()) {
+        (Some(v), Some(c)) if segs.len() > 3 => format!("{v} {c} camera"),
+        (_, Some(c)) if *c != "root" => format!("{c} camera"),
+        _ => "its camera".to_string(),
+    }
 }
 
 /// The stdlib theme's colours, for what Rust draws (stdlib/theme.mocu).
