@@ -28,6 +28,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("mocu-sim", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     ("mocu-mavlink", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     ("mocu-input", &["mocu-value", "mocu-dataserver", "mocu-host"]),
+    ("mocu-mapdata", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     // Replay writes the world model from a recording, as a protocol module would.
     ("mocu-replay", &["mocu-dataserver"]),
     // The recorder reads the DataServer's change feed; it knows no layout, renderer or module.
@@ -63,6 +64,9 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ),
     // The language server: the checker's API over the editor's documents; nothing of the runtime.
     ("mocu-lsp", &["mocu-language"]),
+    // The distributed world model: a module that reads the change feed and writes through
+    // the DataServer's API (the DataServer knows nothing of it).
+    ("mocu-distrib", &["mocu-dataserver", "mocu-host"]),
     // The command line puts everything together.
     (
         "mocu",
@@ -77,6 +81,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "mocu-sim",
             "mocu-mavlink",
             "mocu-input",
+            "mocu-mapdata",
             "mocu-display",
             "mocu-video",
             "mocu-layout",
@@ -84,6 +89,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "mocu-hotreload",
             "mocu-replay",
             "mocu-record",
+            "mocu-distrib",
         ],
     ),
 ];
