@@ -1,6 +1,10 @@
-//! The map module: claims windows of subtype `map` and draws every vehicle under
-//! `root.vehicles` (a symbol pointing along its heading, its name) and its routes with
-//! their waypoints, in local metres, scaled to fit. No tiles.
+//! The map module: claims windows of subtype `map` and draws a chart in Web Mercator
+//! (`view.rs`): the raster tiles and GeoJSON overlays the `map` module (mocu-mapdata)
+//! publishes under `root.map` (`tiles.rs`, `chart.rs`), and over them every vehicle under
+//! `root.vehicles`, placed by latitude/longitude (or its local `x`, `y` from the origin in
+//! `root.map`), with its type's symbol, heading, trail, routes and name (`symbols.rs`).
+//! The Map widget's `follow` centres the view on a vehicle, its `zoom` sets the level.
+//! docs/map.md.
 //!
 //! Pointer (routed by the window manager through transparent layers above): a left press
 //! on a vehicle symbol selects it (`root.operator.selected`); elsewhere it raises the
@@ -9,20 +13,28 @@
 //! the vehicle's type. `symbols()` answers `[name, x, y, …]` in window pixels.
 //!
 //! Symbols, labels and lines grow with the layout's design scale (`root.display.scale`,
-//! never below 1), like the widgets around the map.
+//! never below 1), like the widgets around the map, but not with the window: a larger map
+//! window shows more ground.
+
+mod chart;
+mod symbols;
+mod tiles;
+pub mod view;
 
 use mocu_dataserver::{
     CallOutcome, DataServer, DottedPath, Executor, Kind, MethodSpec, Notification, PathWatch,
     Subject, SubscriptionId, Topic,
 };
 use mocu_display::{
-    Align, Baseline, Brush, Canvas, Color, PaintArgs, Path, Point, Rect, Stroke, TextStyle,
-    claim_window, invalidate,
+    Brush, Canvas, Color, PaintArgs, Point, Rect, Stroke, claim_window, invalidate,
 };
 use mocu_value::{Guid, PropName, Value};
 use parking_lot::Mutex;
 use std::collections::HashMap;
 use std::sync::Arc;
+use symbols::{Labels, VehicleType};
+use tiles::TileCache;
+use view::View;
 
 pub struct MapModule {
     shared: Arc<Shared>,
@@ -32,6 +44,7 @@ struct Shared {
     ds: DataServer,
     exec: Executor,
     state: Mutex<State>,
+    tiles: Arc<TileCache>,
 }
 
 #[derive(Default)]
@@ -44,7 +57,14 @@ struct State {
     maps: Vec<Guid>,
     /// Where each map window last drew each vehicle (window-local px).
     symbols: HashMap<Guid, Vec<(Guid, String, Point)>>,
+    /// What each map window showed last.
+    views: HashMap<Guid, View>,
+    /// Each vehicle's past positions (latitude, longitude), oldest first.
+    trails: HashMap<Guid, Vec<(f64, f64)>>,
     per_vehicle: HashMap<Guid, Vec<PathWatch>>,
+    /// `root.map.features`: the chart is drawn again when its features come or go.
+    features_watch: Option<PathWatch>,
+    features_sub: Option<SubscriptionId>,
 }
 
 impl MapModule {
@@ -55,6 +75,7 @@ impl MapModule {
             ds: ds.clone(),
             exec: ds.serial_executor(),
             state: Mutex::default(),
+            tiles: Arc::default(),
         });
         let weak = Arc::downgrade(&shared);
         let sub = ds
@@ -72,10 +93,19 @@ impl MapModule {
                 }
             })
             .map_err(|e| e.to_string())?;
+        let weak = Arc::downgrade(&shared);
+        let features = ds
+            .watch_object(Guid::ROOT, &["map", "features"], Some(&shared.exec), move |e| {
+                if let Some(sh) = weak.upgrade() {
+                    sh.on_features_folder((e.kind != Kind::Deleted).then_some(e.object));
+                }
+            })
+            .map_err(|e| e.to_string())?;
         {
             let mut st = shared.state.lock();
             st.subs.push(sub);
             st.vehicles_watch = Some(watch);
+            st.features_watch = Some(features);
         }
         Ok(MapModule { shared })
     }
@@ -90,9 +120,11 @@ impl Drop for MapModule {
             let mut st = self.shared.state.lock();
             st.closed = true;
             let mut watches: Vec<PathWatch> = st.vehicles_watch.take().into_iter().collect();
+            watches.extend(st.features_watch.take());
             watches.extend(st.per_vehicle.drain().flat_map(|(_, w)| w));
             let mut subs = std::mem::take(&mut st.subs);
             subs.extend(st.vehicles_sub.take());
+            subs.extend(st.features_sub.take());
             (watches, subs, std::mem::take(&mut st.maps))
         };
         drop(watches);
@@ -100,12 +132,14 @@ impl Drop for MapModule {
             self.shared.ds.unsubscribe(s);
         }
         // Whatever a callback that was running added meanwhile (none can run any more).
-        let (late_watches, late_sub) = {
+        let (late_watches, late_subs) = {
             let mut st = self.shared.state.lock();
-            (std::mem::take(&mut st.per_vehicle), st.vehicles_sub.take())
+            let subs: Vec<SubscriptionId> =
+                st.vehicles_sub.take().into_iter().chain(st.features_sub.take()).collect();
+            (std::mem::take(&mut st.per_vehicle), subs)
         };
         drop(late_watches);
-        if let Some(s) = late_sub {
+        for s in late_subs {
             self.shared.ds.unsubscribe(s);
         }
         for m in maps {
@@ -141,6 +175,7 @@ impl Shared {
                 let mut st = self.state.lock();
                 st.maps.retain(|m| *m != g);
                 st.symbols.remove(&g);
+                st.views.remove(&g);
             }
             _ => {}
         }
@@ -177,11 +212,47 @@ impl Shared {
         self.repaint();
     }
 
+    fn on_features_folder(self: &Arc<Self>, folder: Option<Guid>) {
+        let old = self.state.lock().features_sub.take();
+        if let Some(s) = old {
+            self.ds.unsubscribe(s); // with the lock released: its callback takes it
+        }
+        if let Some(f) = folder {
+            let weak = Arc::downgrade(self);
+            let sub =
+                self.ds.subscribe_on(&self.exec, Topic::children(f), move |_: &Notification| {
+                    if let Some(sh) = weak.upgrade() {
+                        sh.repaint();
+                    }
+                });
+            let mut st = self.state.lock();
+            if st.closed {
+                drop(st);
+                if let Ok(s) = sub {
+                    self.ds.unsubscribe(s);
+                }
+                return;
+            }
+            st.features_sub = sub.ok();
+        }
+        self.repaint();
+    }
+
     fn on_vehicle(self: &Arc<Self>, kind: Kind, v: Guid) {
         match kind {
             Kind::New => {
                 let mut watches = Vec::new();
-                for p in ["nav.x", "nav.y", "nav.heading", "nav.lat", "nav.lon"] {
+                for p in [
+                    "nav.x",
+                    "nav.y",
+                    "nav.heading",
+                    "nav.lat",
+                    "nav.lon",
+                    "control",
+                    "route",
+                    "route_next",
+                    "stale",
+                ] {
                     let weak = Arc::downgrade(self);
                     if let Ok(path) = DottedPath::parse(p)
                         && let Ok(w) =
@@ -294,7 +365,11 @@ impl Shared {
             }
             (0, None) => {
                 for w in ds.children(g).unwrap_or_default() {
-                    if ds.methods(w).is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "select")) {
+                    // A hidden widget has no events (fig. 1 shows one per place to swap with).
+                    let hidden = ds.try_get(w, PropName::new("visible")) == Some(Value::Bool(false));
+                    if !hidden
+                        && ds.methods(w).is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "select"))
+                    {
                         ds.call(w, "select", vec![], None, |_| {});
                     }
                 }
@@ -303,122 +378,175 @@ impl Shared {
         }
     }
 
-    fn paint(&self, g: Guid, c: &mut dyn Canvas, _a: &PaintArgs) {
+    fn paint(self: &Arc<Self>, g: Guid, c: &mut dyn Canvas, _a: &PaintArgs) {
         let size = c.size();
         let u = self.ui_scale();
-        let bg = Color::rgba(0x0e, 0x17, 0x22, 0xf0);
-        let grid = Color::rgba(0x38, 0xbd, 0xf8, 0x22);
-        let frame = Color::rgb(0x3a, 0x4a, 0x5a);
-        c.fill_rounded_rect(Rect::new(0.0, 0.0, size.w, size.h), 6.0 * u, &Brush::Solid(bg));
-        // Vehicles and route points in local metres.
-        let vehicles = self.vehicles();
-        let mut pts: Vec<(f64, f64)> = vehicles.iter().map(|v| v.pos).collect();
-        for v in &vehicles {
-            for r in &v.routes {
-                pts.extend(r.iter().copied());
+        let whole = Rect::new(0.0, 0.0, size.w, size.h);
+        c.fill_rounded_rect(whole, 6.0 * u, &Brush::Solid(chart::WATER));
+        let origin = self.origin();
+        let vehicles = self.vehicles(origin);
+        let features = chart::features(&self.ds);
+        let view = self.view(g, size.w, size.h, u, &vehicles, &features, origin);
+        self.state.lock().views.insert(g, view);
+        c.save();
+        c.clip_rect(whole);
+        let weak = Arc::downgrade(self);
+        self.tiles.draw(&self.ds, c, &view, move || {
+            if let Some(sh) = weak.upgrade() {
+                sh.repaint();
             }
-        }
-        let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
-        for (x, y) in &pts {
-            x0 = x0.min(*x);
-            y0 = y0.min(*y);
-            x1 = x1.max(*x);
-            y1 = y1.max(*y);
-        }
-        if pts.is_empty() {
-            (x0, y0, x1, y1) = (-100.0, -100.0, 100.0, 100.0);
-        }
-        let span = ((x1 - x0).max(y1 - y0)).max(100.0) * 1.3;
-        let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-        let scale = (size.w.min(size.h) as f64 - 20.0 * u as f64).max(10.0) / span;
-        let to_screen = |x: f64, y: f64| {
-            Point::new(
-                (size.w as f64 / 2.0 + (x - cx) * scale) as f32,
-                (size.h as f64 / 2.0 - (y - cy) * scale) as f32,
-            )
-        };
-        // A grid every "nice" distance.
-        let step = nice_step(span / 6.0);
-        let gx0 = ((cx - span) / step).floor() * step;
-        let mut gx = gx0;
-        while gx < cx + span {
-            let a = to_screen(gx, cy - span);
-            let b = to_screen(gx, cy + span);
-            c.line(Point::new(a.x, 0.0), Point::new(b.x, size.h), u, grid);
-            let a = to_screen(cx - span, gx - gx0 + ((cy - span) / step).floor() * step);
-            c.line(Point::new(0.0, a.y), Point::new(size.w, a.y), u, grid);
-            gx += step;
-        }
-        let dim = Color::rgb(0x8f, 0xa3, 0xb5);
-        let scale_text = format!("grid {} m", step);
-        c.draw_text(
-            &scale_text,
-            Point::new(8.0 * u, size.h - 8.0 * u),
-            &TextStyle::new(12.0 * u, dim).baseline(Baseline::Bottom),
-        );
-        for v in &vehicles {
-            for route in &v.routes {
-                let pts: Vec<Point> = route.iter().map(|(x, y)| to_screen(*x, *y)).collect();
-                if pts.len() >= 2 {
-                    c.stroke_path(
-                        &Path::polyline(&pts, false),
-                        &Stroke::new(1.5 * u).dash(&[6.0 * u, 4.0 * u], 0.0),
-                        &Brush::Solid(Color::rgb(0xf5, 0x9e, 0x0b)),
-                    );
-                }
-                for p in pts {
-                    c.fill_circle(p, 3.5 * u, Color::rgb(0xf5, 0x9e, 0x0b));
-                }
-            }
-        }
+        });
+        chart::draw(c, &view, &features, u);
         let selected = self
             .ds
-            .find_child(Guid::ROOT, "operator")
-            .ok()
-            .flatten()
+            .resolve(&["operator"])
             .and_then(|op| self.ds.try_get(op, PropName::new("selected")))
             .and_then(|v| v.as_guid());
-        let mut symbols = Vec::new();
-        // Labels already placed: a label that would overlap one moves down a line.
-        let mut labels: Vec<Rect> = Vec::new();
-        for v in &vehicles {
-            let p = to_screen(v.pos.0, v.pos.1);
-            symbols.push((v.guid, v.name.clone(), p));
-            if selected == Some(v.guid) {
-                c.stroke_circle(p, 16.0 * u, 1.5 * u, Color::rgb(0xfa, 0xcc, 0x15));
-            }
-            let h = (v.heading as f32).to_radians();
-            // Heading 0 = north (up), clockwise.
-            let dir = |a: f32, r: f32| Point::new(p.x + (h + a).sin() * r, p.y - (h + a).cos() * r);
-            let tri =
-                Path::polyline(&[dir(0.0, 12.0 * u), dir(2.5, 8.0 * u), dir(-2.5, 8.0 * u)], true);
-            let col =
-                if v.stale { Color::rgb(0x5b, 0x64, 0x70) } else { Color::rgb(0x38, 0xbd, 0xf8) };
-            c.fill_path(&tri, &Brush::Solid(col));
-            let white = Brush::Solid(Color::rgb(0xe8, 0xf0, 0xf8));
-            c.stroke_path(&tri, &Stroke::new(u), &white);
-            let style = TextStyle::new(12.0 * u, Color::rgb(0xe8, 0xf0, 0xf8))
-                .align(Align::Left)
-                .baseline(Baseline::Middle);
-            let tw = mocu_display::measure_text(&v.name, 12.0 * u, false).width;
-            let line = 15.0 * u;
-            let mut at = Rect::new(p.x + 14.0 * u, p.y - line / 2.0, tw, line);
-            for _ in 0..labels.len() {
-                match labels.iter().find(|l| l.intersects(&at)) {
-                    Some(l) => at.y = l.y + l.h,
-                    None => break,
-                }
-            }
-            labels.push(at);
-            c.draw_text(&v.name, Point::new(at.x, at.y + line / 2.0), &style);
+        // Trails: a point each time a vehicle has moved a few metres since the last.
+        let trails: Vec<Vec<Point>> = {
+            let mut st = self.state.lock();
+            st.trails.retain(|k, _| vehicles.iter().any(|v| v.guid == *k));
+            vehicles
+                .iter()
+                .map(|v| {
+                    let t = st.trails.entry(v.guid).or_default();
+                    let moved = t.last().is_none_or(|l| metres(*l, v.pos) >= TRAIL_STEP_M);
+                    if moved {
+                        t.push(v.pos);
+                        if t.len() > TRAIL_POINTS {
+                            t.remove(0);
+                        }
+                    }
+                    t.iter().map(|(lat, lon)| view.to_screen(*lat, *lon)).collect()
+                })
+                .collect()
+        };
+        let at: Vec<Point> = vehicles.iter().map(|v| view.to_screen(v.pos.0, v.pos.1)).collect();
+        for (v, trail) in vehicles.iter().zip(&trails) {
+            symbols::draw_trail(c, trail, v.colour, u);
         }
-        self.state.lock().symbols.insert(g, symbols);
+        for (v, p) in vehicles.iter().zip(&at) {
+            for r in &v.routes {
+                let pts: Vec<Point> =
+                    r.points.iter().map(|(la, lo)| view.to_screen(*la, *lo)).collect();
+                symbols::draw_route(c, &pts, *p, r.next, r.active, v.colour, u);
+            }
+        }
+        let mut labels = Labels::new(whole.inset(2.0 * u));
+        labels.block(symbols::draw_scale_bar(c, &view, u));
+        labels.block(symbols::draw_north_arrow(c, &view, u));
+        for p in &at {
+            labels.block(Rect::new(p.x - 16.0 * u, p.y - 16.0 * u, 32.0 * u, 32.0 * u));
+        }
+        for (v, p) in vehicles.iter().zip(&at) {
+            let fill = if v.stale { symbols::STALE } else { v.colour };
+            symbols::draw_vehicle(c, v.kind, *p, v.heading, fill, u);
+            symbols::draw_marks(c, *p, selected == Some(v.guid), v.controlled, u);
+        }
+        // Names: the selected and controlled vehicles' first, then the others', then the
+        // chart's (buoys, zones), each where it overlaps nothing placed before it.
+        let mut order: Vec<usize> = (0..vehicles.len()).collect();
+        order.sort_by_key(|&i| !(selected == Some(vehicles[i].guid) || vehicles[i].controlled));
+        for i in order {
+            let v = &vehicles[i];
+            let colour = if v.stale { symbols::STALE } else { symbols::TEXT };
+            symbols::label(c, &mut labels, &v.name, at[i], 18.0 * u, (13.0 * u, colour), u);
+        }
+        for f in &features {
+            if let Some(p) = chart::label_anchor(&view, f) {
+                let colour = match f.kind.as_str() {
+                    "nogo" => chart::NOGO,
+                    "buoy" => chart::buoy_colour(&f.colour),
+                    _ => Color::rgb(0x9f, 0xd8, 0xea),
+                };
+                let gap = if f.kind == "buoy" { 8.0 * u } else { 0.0 };
+                symbols::label(c, &mut labels, &f.name, p, gap, (12.0 * u, colour), u);
+            }
+        }
+        c.restore();
+        let placed = vehicles.iter().zip(&at).map(|(v, p)| (v.guid, v.name.clone(), *p)).collect();
+        self.state.lock().symbols.insert(g, placed);
         c.stroke_rounded_rect(
             Rect::new(0.5, 0.5, size.w - 1.0, size.h - 1.0),
             6.0 * u,
             &Stroke::new(1.0),
-            frame,
+            Color::rgb(0x3a, 0x4a, 0x5a),
         );
+    }
+
+    /// What window `g` shows: centred on the `follow` vehicle of its Map widget (or on
+    /// everything), at the widget's `zoom` (a Web Mercator level, times the design scale)
+    /// or else at the zoom that fits every vehicle and route (or the chart, when there are
+    /// none) with at least 300 m across.
+    #[allow(clippy::too_many_arguments)]
+    fn view(
+        &self,
+        g: Guid,
+        w: f32,
+        h: f32,
+        u: f32,
+        vehicles: &[MapVehicle],
+        features: &[chart::ChartFeature],
+        origin: (f64, f64),
+    ) -> View {
+        let (follow, zoom) = self.widget_params(g);
+        let mut pts: Vec<(f64, f64)> = Vec::new();
+        for v in vehicles {
+            pts.push(view::world(v.pos.0, v.pos.1));
+            for r in &v.routes {
+                pts.extend(r.points.iter().map(|(la, lo)| view::world(*la, *lo)));
+            }
+        }
+        if pts.is_empty() {
+            for f in features.iter().filter(|f| f.kind != "coastline" && f.kind != "land") {
+                pts.extend(f.parts.iter().flatten().map(|(lo, la)| view::world(*la, *lo)));
+            }
+        }
+        if pts.is_empty() {
+            pts.push(view::world(origin.0, origin.1));
+        }
+        let centre = follow
+            .and_then(|f| vehicles.iter().find(|v| v.guid == f))
+            .map(|v| view::world(v.pos.0, v.pos.1));
+        let fitted = View::fit(&pts, centre, w, h, 300.0);
+        match zoom {
+            Some(z) => View { zoom: (z + (u as f64).log2()).clamp(1.0, 22.0), ..fitted },
+            None => fitted,
+        }
+    }
+
+    /// The `follow` and `zoom` of the Map widget placed in window `g`, if given.
+    fn widget_params(&self, g: Guid) -> (Option<Guid>, Option<f64>) {
+        let ds = &self.ds;
+        let widgets = ds.children(g).unwrap_or_default();
+        let Some(w) = widgets.iter().find(|w| ds.info(**w).is_ok_and(|i| &*i.subtype == "Map"))
+        else {
+            return (None, None);
+        };
+        // An object argument is published as its path (`root.vehicles.usv1`).
+        let follow = match ds.try_get(*w, PropName::new("follow")) {
+            Some(Value::Guid(v)) => Some(v),
+            Some(Value::Str(path)) => {
+                let parts: Vec<&str> =
+                    path.strip_prefix("root.").unwrap_or(&path).split('.').collect();
+                ds.resolve(&parts)
+            }
+            _ => None,
+        };
+        let zoom = ds
+            .try_get(*w, PropName::new("zoom"))
+            .and_then(|z| z.as_f64())
+            .filter(|z| z.is_finite());
+        (follow, zoom)
+    }
+
+    /// The local frame's origin: `root.map`'s, else the simulator's default.
+    fn origin(&self) -> (f64, f64) {
+        let map = self.ds.resolve(&["map"]);
+        let get = |k: &str| {
+            map.and_then(|m| self.ds.try_get(m, PropName::new(k))).and_then(|v| v.as_f64())
+        };
+        (get("origin_lat").unwrap_or(32.71), get("origin_lon").unwrap_or(-117.24))
     }
 
     /// The scale symbols, labels and lines draw at: the layout's design scale
@@ -429,52 +557,58 @@ impl Shared {
         s.and_then(|v| v.as_f64()).filter(|s| s.is_finite()).map_or(1.0, |s| s.max(1.0)) as f32
     }
 
-    fn vehicles(&self) -> Vec<MapVehicle> {
+    /// Every vehicle with a position: its latitude/longitude where it reports one (MAVLink,
+    /// the simulator), else its local `x`, `y` from `origin`.
+    fn vehicles(&self, origin: (f64, f64)) -> Vec<MapVehicle> {
         let Some(folder) = self.ds.resolve(&["vehicles"]) else { return Vec::new() };
+        let get = |o: Guid, k: &str| self.ds.try_get(o, PropName::new(k)).and_then(|x| x.as_f64());
+        let place = |o: Guid| match (get(o, "lat"), get(o, "lon"), get(o, "x"), get(o, "y")) {
+            (Some(lat), Some(lon), _, _) if lat != 0.0 || lon != 0.0 => Some((lat, lon)),
+            (_, _, Some(x), Some(y)) => Some(view::local_to_lat_lon(origin, x, y)),
+            _ => None,
+        };
         let mut out = Vec::new();
-        let mut origin: Option<(f64, f64)> = None;
-        for v in self.ds.children(folder).unwrap_or_default() {
+        for (index, v) in self.ds.children(folder).unwrap_or_default().into_iter().enumerate() {
             let Some(nav) = self.ds.find_child(v, "nav").ok().flatten() else { continue };
-            let get =
-                |o: Guid, k: &str| self.ds.try_get(o, PropName::new(k)).and_then(|x| x.as_f64());
-            let pos = match (get(nav, "x"), get(nav, "y"), get(nav, "lat"), get(nav, "lon")) {
-                (Some(x), Some(y), _, _) => (x, y),
-                (_, _, Some(lat), Some(lon)) => {
-                    let o = *origin.get_or_insert((lat, lon));
-                    ((lon - o.1) * 111_320.0 * o.0.to_radians().cos(), (lat - o.0) * 110_540.0)
-                }
-                _ => continue,
+            let Some(pos) = place(nav) else { continue };
+            let info = self.ds.info(v).ok();
+            let active = match self.ds.try_get(v, PropName::new("route")) {
+                Some(Value::Guid(r)) => Some(r),
+                _ => None,
             };
-            let name = self.ds.info(v).map(|i| i.name.to_string()).unwrap_or_default();
-            let stale = self.ds.try_get(v, PropName::new("stale")) == Some(Value::Bool(true));
+            let next = self.ds.try_get(v, PropName::new("route_next")).and_then(|n| n.as_i64());
             let mut routes = Vec::new();
             if let Some(rs) = self.ds.find_child(v, "routes").ok().flatten() {
                 for r in self.ds.children(rs).unwrap_or_default() {
                     // Waypoints form a chain (each the child of the one before, so they can
                     // be edited by insert-between and delete-and-promote); siblings are
                     // taken in order too.
-                    let mut wps = Vec::new();
+                    let mut points = Vec::new();
                     let mut level = self.ds.children(r).unwrap_or_default();
                     while let Some(&first) = level.first() {
-                        for w in &level {
-                            if let (Some(x), Some(y)) = (get(*w, "x"), get(*w, "y")) {
-                                wps.push((x, y));
-                            }
-                        }
+                        points.extend(level.iter().filter_map(|w| place(*w)));
                         level = self.ds.children(first).unwrap_or_default();
-                        if wps.len() > 10_000 {
+                        if points.len() > 10_000 {
                             break;
                         }
                     }
-                    routes.push(wps);
+                    let is_active = active == Some(r);
+                    routes.push(MapRoute {
+                        points,
+                        active: is_active,
+                        next: next.filter(|_| is_active).and_then(|n| usize::try_from(n).ok()),
+                    });
                 }
             }
             out.push(MapVehicle {
                 guid: v,
-                name,
+                name: info.as_ref().map(|i| i.name.to_string()).unwrap_or_default(),
+                kind: VehicleType::of(info.as_ref().map_or("", |i| &*i.kind)),
+                colour: symbols::vehicle_colour(index),
                 pos,
                 heading: get(nav, "heading").unwrap_or(0.0),
-                stale,
+                stale: self.ds.try_get(v, PropName::new("stale")) == Some(Value::Bool(true)),
+                controlled: matches!(self.ds.try_get(v, PropName::new("control")), Some(Value::Str(s)) if !s.is_empty()),
                 routes,
             });
         }
@@ -485,18 +619,33 @@ impl Shared {
 struct MapVehicle {
     guid: Guid,
     name: String,
+    kind: VehicleType,
+    colour: Color,
+    /// Latitude, longitude.
     pos: (f64, f64),
     heading: f64,
     stale: bool,
-    routes: Vec<Vec<(f64, f64)>>,
+    /// An operator holds its control (`control` is not empty).
+    controlled: bool,
+    routes: Vec<MapRoute>,
 }
 
-fn nice_step(x: f64) -> f64 {
-    let p = 10f64.powf(x.max(1.0).log10().floor());
-    for m in [1.0, 2.0, 5.0, 10.0] {
-        if m * p >= x {
-            return m * p;
-        }
-    }
-    10.0 * p
+struct MapRoute {
+    /// Latitude, longitude of each waypoint, in order.
+    points: Vec<(f64, f64)>,
+    /// The vehicle's `route` is this one.
+    active: bool,
+    /// The waypoint the vehicle heads for (`route_next`), on the active route.
+    next: Option<usize>,
+}
+
+/// Trails keep a point every few metres, the last few hundred.
+const TRAIL_STEP_M: f64 = 3.0;
+const TRAIL_POINTS: usize = 300;
+
+/// Metres between two latitude/longitude pairs (flat earth: trail spacing only).
+fn metres(a: (f64, f64), b: (f64, f64)) -> f64 {
+    let dy = (a.0 - b.0) * 111_320.0;
+    let dx = (a.1 - b.1) * 111_320.0 * a.0.to_radians().cos();
+    (dx * dx + dy * dy).sqrt()
 }

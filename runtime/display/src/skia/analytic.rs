@@ -426,6 +426,9 @@ fn scan_row(
     clear: bool,
     k: impl Fn(f32) -> f32,
 ) {
+    if x1 <= x0 {
+        return; // nothing of the row is covered (a ring cut by the layer's edge)
+    }
     let mut x = x0;
     for &(a, b, solid) in runs {
         let a = a.clamp(x, x1);

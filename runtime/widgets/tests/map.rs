@@ -1,0 +1,247 @@
+//! The map at its design size (640×480), drawn by the CPU path: the simulator's harbour
+//! (the shipped GeoJSON, through the `map` module), the simulator's vehicles by type with
+//! their trails, routes and marks, the view that follows a vehicle at a zoom, and a raster
+//! background from an MBTiles file this test draws itself.
+//!
+//! `UPDATE_GOLDEN=1 cargo test -p mocu-widgets --test map` rewrites tests/golden/map_*.png.
+
+mod pixels;
+
+use mocu_dataserver::{Config, DataServer, Guid, ManualClock, ObjectInfo, Value};
+use mocu_display::{Clock, Display, DisplayOptions};
+use mocu_host::{Module, ModuleContext};
+use mocu_layout::{Layout, LayoutConfig, NullSink};
+use mocu_mapdata::{MapDataConfig, MapDataModule};
+use mocu_sim::{Sim, SimConfig};
+use mocu_widgets::map::view;
+use mocu_widgets::{Library, MapModule, RendererConfig, WidgetRenderer};
+use pixels::check_golden;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+fn here(file: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(file)
+}
+
+fn harbour() -> PathBuf {
+    here("../../layouts/maps/harbour.geojson")
+}
+
+struct Rig {
+    ds: DataServer,
+    display: Display,
+    layout: Layout,
+    sim: Sim,
+    _renderer: WidgetRenderer,
+    _map: MapModule,
+    _data: MapDataModule,
+}
+
+impl Rig {
+    /// A map layout with the `map` module's data, and the simulator (seed 7, every
+    /// vehicle started at once) run for `seconds`, a frame drawn every simulated second
+    /// (the trails keep what the frames saw).
+    fn new(layout: &str, data: MapDataConfig, seconds: usize) -> Rig {
+        let (bundle, _) = mocu_language::load_target(&here(layout)).unwrap();
+        let program = &bundle.layouts[0].program;
+        let clock = ManualClock::new();
+        let ds = DataServer::with_clock(Config { workers: 2 }, Arc::new(clock));
+        let display =
+            Display::new(&ds, DisplayOptions::new(640, 480).clock(Clock::manual())).unwrap();
+        let mut data = MapDataModule::new(data);
+        data.start(&ModuleContext::detached("map", ds.clone())).unwrap();
+        let lib = Library::compile(program, true).unwrap();
+        let renderer = WidgetRenderer::start(&ds, lib, RendererConfig::default()).unwrap();
+        let map = MapModule::start(&ds).unwrap();
+        let lc = LayoutConfig { screen: (640.0, 480.0), ..LayoutConfig::default() };
+        let layout = Layout::load(&ds, program, lc, Arc::new(NullSink)).unwrap();
+        let cfg = SimConfig {
+            seed: 7,
+            appear_every: 0.0,
+            autostart: true,
+            camera_width: 8,
+            camera_height: 6,
+            camera_fps: 1.0,
+            ..SimConfig::default()
+        };
+        let sim = Sim::new(ModuleContext::detached("sim", ds.clone()), cfg).unwrap();
+        let mut rig = Rig { ds, display, layout, sim, _renderer: renderer, _map: map, _data: data };
+        for _ in 0..seconds {
+            for _ in 0..20 {
+                rig.sim.step(0.05);
+            }
+            rig.frame();
+        }
+        rig
+    }
+
+    fn frame(&mut self) -> tiny_skia::Pixmap {
+        for _ in 0..3 {
+            self.layout.settle();
+            self.ds.quiesce();
+            self.display.frame();
+        }
+        self.display.read_frame()
+    }
+
+    fn vehicle(&self, name: &str) -> Guid {
+        self.ds.resolve(&["vehicles", name]).unwrap()
+    }
+
+    /// usv1 selected by the operator, ugv1 under their control.
+    fn select_and_control(&mut self) {
+        let op = self.ds.create_object(Guid::ROOT, ObjectInfo::new("operator", "operator"));
+        let op = op.unwrap_or_else(|_| self.ds.resolve(&["operator"]).unwrap());
+        self.ds.set(op, "selected", Value::Guid(self.vehicle("usv1"))).unwrap();
+        let ugv = self.vehicle("ugv1");
+        let out = self.ds.call_wait(ugv, "request_control", vec![Value::str("op1")], None);
+        assert!(out.is_accepted(), "{out:?}");
+        self.sim.step(0.05);
+    }
+
+    /// Where the map drew each vehicle: (name, window px).
+    fn symbols(&self) -> Vec<(String, f32, f32)> {
+        let win = self.ds.resolve(&["display", "chart"]).unwrap();
+        let out = self.ds.call_wait(win, "symbols", vec![], None);
+        let mocu_dataserver::CallOutcome::Accepted(v) = out else { panic!("{out:?}") };
+        v.chunks(3)
+            .map(|c| {
+                (
+                    c[0].as_str().unwrap().to_string(),
+                    c[1].as_f64().unwrap() as f32,
+                    c[2].as_f64().unwrap() as f32,
+                )
+            })
+            .collect()
+    }
+}
+
+fn with_harbour() -> MapDataConfig {
+    MapDataConfig { overlays: vec![harbour()], ..MapDataConfig::default() }
+}
+
+#[test]
+fn the_harbour_with_every_vehicle_type_trails_routes_and_the_selected_and_controlled_marks() {
+    let mut rig = Rig::new("tests/map.mocu", with_harbour(), 30);
+    rig.select_and_control();
+    let f = rig.frame();
+    check_golden("map_harbour", &f);
+    // Every vehicle is on the map, inside the window.
+    let symbols = rig.symbols();
+    assert_eq!(symbols.len(), 4, "{symbols:?}");
+    for (name, x, y) in &symbols {
+        assert!((0.0..640.0).contains(x) && (0.0..480.0).contains(y), "{name} at {x},{y}");
+    }
+}
+
+#[test]
+fn follow_centres_the_view_on_the_vehicle_and_zoom_sets_the_web_mercator_level() {
+    let mut rig = Rig::new("tests/map_follow.mocu", with_harbour(), 20);
+    let f = rig.frame();
+    check_golden("map_follow_zoom17", &f);
+    let symbols = rig.symbols();
+    let (_, x, y) = symbols.iter().find(|s| s.0 == "usv1").unwrap();
+    assert!((x - 320.0).abs() < 1.0 && (y - 240.0).abs() < 1.0, "usv1 at {x},{y}");
+    // Zoom 17 at 32.71° N: about 1.0 m a pixel, so two vehicles 100 m apart are about
+    // 100 px apart on the screen.
+    let lat_lon = |name: &str| {
+        let nav = rig.ds.resolve(&["vehicles", name, "nav"]).unwrap();
+        let get = |k: &str| rig.ds.try_get(nav, k.into()).and_then(|v| v.as_f64()).unwrap();
+        (get("lat"), get("lon"))
+    };
+    let (a, b) = (lat_lon("usv1"), lat_lon("usv2"));
+    let metres = ((a.0 - b.0) * 111_320.0).hypot((a.1 - b.1) * 111_320.0 * a.0.to_radians().cos());
+    let (_, bx, by) = symbols.iter().find(|s| s.0 == "usv2").unwrap();
+    let px = (bx - x).hypot(by - y) as f64;
+    let per_px = 156_543.034 * 32.71f64.to_radians().cos() / 2f64.powi(17);
+    assert!((px * per_px - metres).abs() < 2.0, "{px} px for {metres} m");
+}
+
+/// A harbour chart drawn into tiles in the paper-chart palette (water, land, piers), the
+/// way a site's offline tiles look.
+fn harbour_tile(z: u32, x: u32, y: u32, features: &[mocu_mapdata::Feature]) -> Vec<u8> {
+    let mut p = tiny_skia::Pixmap::new(256, 256).unwrap();
+    p.fill(tiny_skia::Color::from_rgba8(0xa9, 0xcf, 0xe0, 255));
+    let n = f64::from(1u32 << z);
+    let to_px = |lon: f64, lat: f64| {
+        let (wx, wy) = view::world(lat, lon);
+        (((wx * n) - x as f64) * 256.0, ((wy * n) - y as f64) * 256.0)
+    };
+    let paint = |rgb: [u8; 3]| {
+        let mut paint = tiny_skia::Paint::default();
+        paint.set_color_rgba8(rgb[0], rgb[1], rgb[2], 255);
+        paint.anti_alias = true;
+        paint
+    };
+    for f in features {
+        let colour = match f.kind.as_str() {
+            "coastline" => [0xf1, 0xec, 0xdf],
+            "pier" => [0xb4, 0xb0, 0xa8],
+            "breakwater" => [0x9c, 0x98, 0x90],
+            _ => continue,
+        };
+        let mut b = tiny_skia::PathBuilder::new();
+        for part in &f.parts {
+            for (i, (lon, lat)) in part.iter().enumerate() {
+                let (px, py) = to_px(*lon, *lat);
+                if i == 0 {
+                    b.move_to(px as f32, py as f32);
+                } else {
+                    b.line_to(px as f32, py as f32);
+                }
+            }
+            if f.shape == mocu_mapdata::Shape::Polygon {
+                b.close();
+            }
+        }
+        let Some(path) = b.finish() else { continue };
+        if f.shape == mocu_mapdata::Shape::Polygon {
+            p.fill_path(
+                &path,
+                &paint(colour),
+                tiny_skia::FillRule::Winding,
+                Default::default(),
+                None,
+            );
+            let stroke = tiny_skia::Stroke { width: 1.0, ..Default::default() };
+            p.stroke_path(&path, &paint([0x8a, 0x80, 0x6a]), &stroke, Default::default(), None);
+        } else {
+            let width = (6.0 * (z as f32 - 16.0).exp2()).max(2.0);
+            let stroke = tiny_skia::Stroke { width, ..Default::default() };
+            p.stroke_path(&path, &paint(colour), &stroke, Default::default(), None);
+        }
+    }
+    p.encode_png().unwrap()
+}
+
+fn harbour_mbtiles(file: &Path) {
+    let text = std::fs::read_to_string(harbour()).unwrap();
+    let features = mocu_mapdata::overlay::parse(&text).unwrap();
+    let mut tiles = Vec::new();
+    for z in 15..=17u32 {
+        let n = f64::from(1u32 << z);
+        let (x0, y0) = view::world(32.722, -117.252);
+        let (x1, y1) = view::world(32.698, -117.228);
+        for ty in (y0 * n) as u32..=(y1 * n) as u32 {
+            for tx in (x0 * n) as u32..=(x1 * n) as u32 {
+                tiles.push(((z, tx, ty), harbour_tile(z, tx, ty, &features)));
+            }
+        }
+    }
+    mocu_mapdata::tiles::write_mbtiles(file, "harbour", &tiles).unwrap();
+}
+
+#[test]
+fn a_raster_background_from_an_mbtiles_file_under_the_vehicles() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("harbour.mbtiles");
+    harbour_mbtiles(&file);
+    let data = MapDataConfig { tiles: Some(file), ..MapDataConfig::default() };
+    let mut rig = Rig::new("tests/map.mocu", data, 30);
+    let f = rig.frame();
+    check_golden("map_tiles", &f);
+    // The tiles are there: the paper chart's land colour shows, which the map's own
+    // palette never uses.
+    let land = f.pixels().iter().filter(|p| (p.red(), p.green(), p.blue()) == (0xf1, 0xec, 0xdf));
+    assert!(land.count() > 1000);
+}
