@@ -26,15 +26,16 @@ use crate::passes::{Module, Modules, UseEdge};
 use crate::source::{FileId, SourceLoader, SourceMap, Span};
 use crate::{Config, Program, Schema};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 
 /// Checks after which a tree nobody took is dropped (a document closed, an item deleted).
-const KEEP_ROUNDS: u64 = 4;
+const KEEP_ROUNDS: u64 = 32;
 
 /// The trees of earlier parses, by item text. See the module documentation.
 #[derive(Default)]
 pub struct ItemCache {
     /// Trees ready to be taken, by their item's text.
-    trees: HashMap<String, Vec<Tree>>,
+    trees: HashMap<String, Slot, BuildHasherDefault<Fx>>,
     /// Each file parsed with reuse: its items in order, to take their trees back afterwards.
     cuts: HashMap<String, Vec<Cut>>,
     /// Bumped by every [`ItemCache::load_sources`].
@@ -42,17 +43,25 @@ pub struct ItemCache {
     stats: Stats,
 }
 
+/// The trees of one item text.
+#[derive(Default)]
+struct Slot {
+    trees: Vec<Tree>,
+    /// The last round that took or gave back one of them.
+    seen: u64,
+}
+
 /// The tree of one item text where it was last parsed.
 struct Tree {
     start: u32,
+    file: FileId,
     items: Vec<Item>,
-    round: u64,
 }
 
 /// One item of a file as the cache parsed it.
 struct Cut {
-    text: String,
     start: usize,
+    end: usize,
     /// How many items of the tree it gave (0 or 1).
     items: usize,
     /// Whether its tree may be kept: it parsed without a diagnostic.
@@ -93,26 +102,33 @@ impl ItemCache {
     ) -> Program {
         let modules = self.load_sources(path, text, loader, sources, diags);
         let program = crate::compile_modules(&modules, schema, config, diags);
-        self.recycle(modules);
+        self.recycle(modules, sources);
         program
     }
 
-    /// Gives the trees of `modules` (from [`ItemCache::load_sources`]) back for the next parse.
-    pub fn recycle(&mut self, modules: Modules) {
+    /// Gives the trees of `modules` (from [`ItemCache::load_sources`], their texts in
+    /// `sources`) back for the next parse.
+    pub fn recycle(&mut self, modules: Modules, sources: &SourceMap) {
         for m in modules {
             let Some(cuts) = self.cuts.remove(&m.path) else { continue };
             if cuts.iter().map(|c| c.items).sum::<usize>() != m.ast.items.len() {
                 continue;
             }
+            let text = &sources.get(m.file).text;
             let mut items = m.ast.items.into_iter();
             for c in cuts {
                 let tree: Vec<Item> = items.by_ref().take(c.items).collect();
-                if c.keep {
-                    self.trees.entry(c.text).or_default().push(Tree {
-                        start: c.start as u32,
-                        items: tree,
-                        round: self.round,
-                    });
+                let Some(key) = text.get(c.start..c.end).filter(|_| c.keep) else { continue };
+                let tree = Tree { start: c.start as u32, file: m.file, items: tree };
+                match self.trees.get_mut(key) {
+                    Some(slot) => {
+                        slot.trees.push(tree);
+                        slot.seen = self.round;
+                    }
+                    None => {
+                        let slot = Slot { trees: vec![tree], seen: self.round };
+                        self.trees.insert(key.to_string(), slot);
+                    }
                 }
             }
         }
@@ -138,11 +154,17 @@ impl ItemCache {
             let src = &text[chunk.start..chunk.end];
             let before = items.len();
             let mut keep = true;
-            let reused = self.trees.get_mut(src).and_then(Vec::pop);
+            let round = self.round;
+            let reused = self.trees.get_mut(src).and_then(|slot| {
+                slot.seen = round;
+                slot.trees.pop()
+            });
             if let Some(mut tree) = reused {
                 let delta = chunk.start as i64 - i64::from(tree.start);
-                for item in &mut tree.items {
-                    item.shift(delta, file);
+                if delta != 0 || tree.file != file {
+                    for item in &mut tree.items {
+                        item.shift(delta, file);
+                    }
                 }
                 items.append(&mut tree.items);
                 self.stats.reused += 1;
@@ -162,8 +184,8 @@ impl ItemCache {
                 }
             }
             cuts.push(Cut {
-                text: src.to_string(),
                 start: chunk.start,
+                end: chunk.end,
                 items: items.len() - before,
                 keep,
             });
@@ -183,10 +205,7 @@ impl ItemCache {
     ) -> Modules {
         self.round += 1;
         let round = self.round;
-        self.trees.retain(|_, trees| {
-            trees.retain(|t| t.round + KEEP_ROUNDS >= round);
-            !trees.is_empty()
-        });
+        self.trees.retain(|_, slot| slot.seen + KEEP_ROUNDS >= round);
         let mut modules: Modules = Vec::new();
         let mut stack: Vec<(usize, Option<Span>)> = Vec::new();
         self.load(path, text, loader, sources, diags, &mut modules, &mut stack);
@@ -302,6 +321,32 @@ fn report_cycle(cycle: &[(usize, Option<Span>)], modules: &Modules, diags: &mut 
     diags
         .error(codes::USE_CYCLE, span, format!("`use` cycle: {}", chain.join(" → ")))
         .help("move the shared definitions into a third file that both use");
+}
+
+/// Fx, rustc's hash: item texts are hashed twice a check, and SipHash (std's) was a tenth of
+/// a warm parse.
+#[derive(Default)]
+struct Fx(u64);
+
+impl Hasher for Fx {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            self.add(u64::from_le_bytes([c[0], c[1], c[2], c[3], c[4], c[5], c[6], c[7]]));
+        }
+        for &b in chunks.remainder() {
+            self.add(u64::from(b));
+        }
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+impl Fx {
+    fn add(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
 }
 
 /// Moving a tree: every span `delta` bytes on, into `file`. Each node is taken apart whole

@@ -47,21 +47,19 @@ fn corpus() -> &'static [(String, String)] {
 /// The parser's tree and diagnostics of `text`, spans and all.
 fn parsed(text: &str) -> (String, Vec<mocu_language::Diagnostic>) {
     let mut d = Diagnostics::new();
-    let tree = parser::parse(FileId(3), text, &mut d);
+    let tree = parser::parse(FileId(0), text, &mut d);
     (format!("{:?}", tree.items), d.into_vec())
 }
 
 /// The same through `cache`, whose trees are given back afterwards.
 fn reparsed(cache: &mut ItemCache, text: &str) -> (String, Vec<mocu_language::Diagnostic>) {
+    let mut sources = SourceMap::new();
+    let file = sources.add("/a.mocu".into(), text.into());
     let mut d = Diagnostics::new();
-    let tree = cache.parse("/a.mocu", FileId(3), text, &mut d);
+    let tree = cache.parse("/a.mocu", file, text, &mut d);
     let out = format!("{:?}", tree.items);
-    cache.recycle(vec![Module {
-        file: FileId(3),
-        path: "/a.mocu".into(),
-        ast: tree,
-        uses: vec![],
-    }]);
+    let module = Module { file, path: "/a.mocu".into(), ast: tree, uses: vec![] };
+    cache.recycle(vec![module], &sources);
     (out, d.into_vec())
 }
 

@@ -69,6 +69,11 @@ pub fn complete(
 ) -> Vec<CompletionItem> {
     let text = index.text(path);
     let before = &text[..offset.min(text.len())];
+    // Inside `use "…`: files and folders.
+    if let Some(typed) = crate::use_paths::typed(before) {
+        let cursor = crate::text::LineIndex::new(text).position(offset);
+        return crate::use_paths::complete(path, typed, cursor);
+    }
     // After `a.b.`: the members of the path so far.
     let word_start = before.len()
         - before.bytes().rev().take_while(|b| b.is_ascii_alphanumeric() || *b == b'_').count();

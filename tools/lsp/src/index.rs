@@ -4,6 +4,7 @@
 //! definition, references, rename, hover and semantic tokens read it.
 
 use mocu_language::ast::*;
+use mocu_language::incremental::ItemCache;
 use mocu_language::passes::{self, Definitions, ModuleId, Modules};
 use mocu_language::{Diagnostics, SourceLoader, SourceMap};
 use std::collections::HashMap;
@@ -59,13 +60,13 @@ pub struct Index {
 }
 
 impl Index {
-    /// Parses `path` (its text from `loader`) and its `use`s, and resolves every name.
-    pub fn build(path: &str, loader: &dyn SourceLoader) -> Index {
+    /// Parses `path` (its text from `loader`) and its `use`s, reusing the trees in `cache`,
+    /// and resolves every name.
+    pub fn build(path: &str, loader: &dyn SourceLoader, cache: &mut ItemCache) -> Index {
         let Ok(text) = loader.read(path) else { return Index::default() };
         let mut sources = SourceMap::new();
         let mut diags = Diagnostics::new();
-        let modules =
-            passes::load_sources::load_sources(path, text, loader, &mut sources, &mut diags);
+        let modules = cache.load_sources(path, text, loader, &mut sources, &mut diags);
         let tables = passes::collect_definitions::collect_definitions(&modules, &mut diags);
         let mut ix = Index { modules, tables, sources, ..Index::default() };
         for m in 0..ix.modules.len() {

@@ -13,10 +13,12 @@ pub mod hover;
 pub mod index;
 pub mod overlay;
 pub mod paths;
+pub mod schedule;
 pub mod symbols;
 pub mod text;
+pub mod use_paths;
 
-use check::{Analyses, Job};
+use check::{Analyses, Job, Work};
 use crossbeam_channel::Sender;
 use index::Index;
 use lsp_server::{Connection, ErrorCode, Message, Notification, Request, Response};
@@ -26,9 +28,10 @@ use lsp_types::notification::{
 };
 use lsp_types::request::{
     CodeActionRequest, Completion, DocumentSymbolRequest, Formatting, GotoDefinition, HoverRequest,
-    References, Rename, Request as _, SemanticTokensFullRequest,
+    RangeFormatting, References, Rename, Request as _, SemanticTokensFullRequest,
 };
 use lsp_types::*;
+use mocu_language::incremental::ItemCache;
 use overlay::{Document, Documents};
 use std::collections::HashMap;
 use text::{LineIndex, path_to_uri, uri_to_path};
@@ -51,7 +54,7 @@ pub fn capabilities() -> ServerCapabilities {
         })),
         hover_provider: Some(HoverProviderCapability::Simple(true)),
         completion_provider: Some(CompletionOptions {
-            trigger_characters: Some(vec![".".into()]),
+            trigger_characters: Some(vec![".".into(), "\"".into(), "/".into()]),
             ..CompletionOptions::default()
         }),
         definition_provider: Some(OneOf::Left(true)),
@@ -60,6 +63,7 @@ pub fn capabilities() -> ServerCapabilities {
         document_symbol_provider: Some(OneOf::Left(true)),
         code_action_provider: Some(CodeActionProviderCapability::Simple(true)),
         document_formatting_provider: Some(OneOf::Left(true)),
+        document_range_formatting_provider: Some(OneOf::Left(true)),
         semantic_tokens_provider: Some(
             SemanticTokensOptions {
                 legend: SemanticTokensLegend {
@@ -77,19 +81,24 @@ pub fn capabilities() -> ServerCapabilities {
 
 /// Runs the server on a connection (stdio, or in memory for tests) until `exit`.
 pub fn serve(connection: Connection) -> Result<(), String> {
+    serve_with(connection, schedule::Timing::default())
+}
+
+/// [`serve`], edits waiting `timing` before they are checked.
+pub fn serve_with(connection: Connection, timing: schedule::Timing) -> Result<(), String> {
     let caps = serde_json::to_value(capabilities()).map_err(|e| e.to_string())?;
     connection.initialize(caps).map_err(|e| e.to_string())?;
     let (jobs, rx) = crossbeam_channel::unbounded();
     let analyses = Analyses::default();
-    let worker = check::spawn_worker(rx, connection.sender.clone(), analyses.clone())
+    let worker = check::spawn_worker(rx, connection.sender.clone(), analyses.clone(), timing)
         .map_err(|e| e.to_string())?;
     let mut server = Server {
         docs: Documents::default(),
         generation: 0,
         indexes: HashMap::new(),
+        cache: ItemCache::new(),
         jobs,
         analyses,
-        out: connection.sender.clone(),
     };
     for msg in &connection.receiver {
         match msg {
@@ -116,9 +125,10 @@ struct Server {
     generation: u64,
     /// The last index built for each document, with its generation.
     indexes: HashMap<String, (u64, std::rc::Rc<Index>)>,
-    jobs: Sender<Job>,
+    /// The trees of the indexes' files, for the next index.
+    cache: ItemCache,
+    jobs: Sender<Work>,
     analyses: Analyses,
-    out: Sender<Message>,
 }
 
 impl Server {
@@ -134,6 +144,7 @@ impl Server {
                     path.clone(),
                     Document { text: p.text_document.text, version: p.text_document.version },
                 );
+                self.send_check(&path, true);
                 self.changed(&path);
             }
             DidChangeTextDocument::METHOD => {
@@ -160,18 +171,8 @@ impl Server {
                 };
                 let Some(path) = uri_to_path(&p.text_document.uri) else { return };
                 self.docs.open.remove(&path);
-                if let Ok(mut a) = self.analyses.lock() {
-                    a.remove(&path);
-                }
-                let params = PublishDiagnosticsParams {
-                    uri: p.text_document.uri,
-                    diagnostics: Vec::new(),
-                    version: None,
-                };
-                let _ = self.out.send(Message::Notification(Notification::new(
-                    lsp_types::notification::PublishDiagnostics::METHOD.into(),
-                    params,
-                )));
+                self.indexes.remove(&path);
+                let _ = self.jobs.send(Work::Close(path.clone()));
                 // Documents that use it now read it from the disk.
                 self.changed(&path);
             }
@@ -200,8 +201,14 @@ impl Server {
     }
 
     fn check(&self, path: &str) {
+        self.send_check(path, false);
+    }
+
+    fn send_check(&self, path: &str, opened: bool) {
         let version = self.docs.open.get(path).map_or(0, |d| d.version);
-        let _ = self.jobs.send(Job { path: path.to_string(), version, loader: self.docs.loader() });
+        let loader = self.docs.loader();
+        let job = Job { path: path.to_string(), version, loader, opened };
+        let _ = self.jobs.send(Work::Check(job));
     }
 
     /// The index of the document at `path` over the open documents as they are now.
@@ -211,7 +218,13 @@ impl Server {
         {
             return ix.clone();
         }
-        let ix = std::rc::Rc::new(Index::build(path, &self.docs.loader()));
+        // The last index of this document gives its trees to the next (when no answer holds it).
+        if let Some((_, old)) = self.indexes.remove(path)
+            && let Ok(old) = std::rc::Rc::try_unwrap(old)
+        {
+            self.cache.recycle(old.modules, &old.sources);
+        }
+        let ix = std::rc::Rc::new(Index::build(path, &self.docs.loader(), &mut self.cache));
         self.indexes.insert(path.to_string(), (self.generation, ix.clone()));
         ix
     }
@@ -362,6 +375,15 @@ impl Server {
                 let Some(text) = self.docs.text(&path) else { return Ok(serde_json::Value::Null) };
                 Ok(json(&format(text)?))
             }
+            RangeFormatting::METHOD => {
+                let p: DocumentRangeFormattingParams =
+                    serde_json::from_value(req.params).map_err(bad)?;
+                let Some(path) = uri_to_path(&p.text_document.uri) else {
+                    return Ok(serde_json::Value::Null);
+                };
+                let Some(text) = self.docs.text(&path) else { return Ok(serde_json::Value::Null) };
+                Ok(json(&format_range(text, p.range)?))
+            }
             _ => Err((ErrorCode::MethodNotFound, format!("unknown request {}", req.method))),
         }
     }
@@ -412,6 +434,27 @@ fn format(text: &str) -> Result<Vec<TextEdit>, (ErrorCode, String)> {
             let end = LineIndex::new(text).position(text.len());
             Ok(vec![TextEdit { range: Range::new(Position::new(0, 0), end), new_text: out }])
         }
+        Err(mocu_language::format::FormatError::Syntax) => Ok(Vec::new()),
+        Err(e) => Err((ErrorCode::RequestFailed, e.to_string())),
+    }
+}
+
+/// `mocu fmt`'s edits of the items `range` touches (an editor's "format selection"); nothing
+/// for a file with syntax errors.
+fn format_range(text: &str, range: Range) -> Result<Vec<TextEdit>, (ErrorCode, String)> {
+    let lines = LineIndex::new(text);
+    let bytes = lines.offset(range.start)..lines.offset(range.end);
+    let mut diags = mocu_language::Diagnostics::new();
+    match mocu_language::format::range::format_range(
+        mocu_language::FileId(0),
+        text,
+        bytes,
+        &mut diags,
+    ) {
+        Ok(edits) => Ok(edits
+            .into_iter()
+            .map(|(r, new_text)| TextEdit { range: lines.range(r.start, r.end), new_text })
+            .collect()),
         Err(mocu_language::format::FormatError::Syntax) => Ok(Vec::new()),
         Err(e) => Err((ErrorCode::RequestFailed, e.to_string())),
     }

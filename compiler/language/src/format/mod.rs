@@ -12,6 +12,7 @@
 
 pub mod diff;
 mod printer;
+pub mod range;
 mod shape;
 mod tokens;
 
