@@ -8,7 +8,6 @@ use crate::ast::{BinOp, UnOp};
 use crate::source::Span;
 use crate::types::{Type, TypeKind};
 use serde::{Deserialize, Serialize};
-use std::collections::HashSet;
 use std::fmt;
 use std::sync::Arc;
 
@@ -392,63 +391,115 @@ impl Bound {
     /// listed already; the others are walked without recursion, so the cost is linear in
     /// the `let`s reached).
     pub fn new(expr: Expr) -> Bound {
-        let own = expr.reads();
-        let paths = collect_paths(&own);
+        let paths = expr_paths(&expr);
         Bound { expr, paths }
     }
+}
+
+/// Every path `e` reads, through its `let`s too, each once, in order of first appearance
+/// ([`Bound::paths`]), in one walk: a `let` is taken apart where it first appears.
+fn expr_paths(e: &Expr) -> Vec<Path> {
+    let mut set = PathSet::new(usize::MAX);
+    e.walk(&mut |x| match &x.node {
+        Node::Path(p) => {
+            set.path(p);
+        }
+        Node::Let(l) => {
+            set.read_let(&l.0);
+        }
+        _ => {}
+    });
+    set.paths
 }
 
 /// Every path of `reads` and of the `let`s they name, each once, in order of appearance;
 /// `None` when there are more than `limit`.
 fn collect_paths_upto(reads: &[Read], limit: usize) -> Option<Vec<Path>> {
-    let mut paths = Vec::new();
-    let mut seen_paths: Seen<&Path> = Seen::default();
-    let mut seen_lets: Seen<*const Let> = Seen::default();
-    let mut stack: Vec<(&[Read], usize)> = vec![(reads, 0)];
-    while let Some((list, i)) = stack.pop() {
-        let Some(r) = list.get(i) else { continue };
-        stack.push((list, i + 1));
-        let more: &[Path] = match r {
-            Read::Path(p) => std::slice::from_ref(p),
-            Read::Let(l) => {
-                if !seen_lets.insert(Arc::as_ptr(&l.0)) {
-                    continue;
+    let mut set = PathSet::new(limit);
+    set.reads(reads).then_some(set.paths)
+}
+
+/// Paths collected once each, in order, up to a limit; each `let` taken apart once.
+struct PathSet<'e> {
+    paths: Vec<Path>,
+    seen_paths: Seen<&'e Path>,
+    seen_lets: Seen<*const Let>,
+    limit: usize,
+}
+
+impl<'e> PathSet<'e> {
+    fn new(limit: usize) -> PathSet<'e> {
+        PathSet {
+            paths: Vec::new(),
+            seen_paths: Seen::default(),
+            seen_lets: Seen::default(),
+            limit,
+        }
+    }
+
+    /// Adds `p` unless it is there; false when that makes more than the limit.
+    fn path(&mut self, p: &'e Path) -> bool {
+        if self.seen_paths.insert(p) {
+            if self.paths.len() == self.limit {
+                return false;
+            }
+            self.paths.push(p.clone());
+        }
+        true
+    }
+
+    /// Adds the paths a `let` reads (listed, or through its reads), unless it was seen.
+    fn read_let(&mut self, l: &'e Let) -> bool {
+        if !self.seen_lets.insert(l as *const Let) {
+            return true;
+        }
+        match &l.paths {
+            Some(ps) => ps.iter().all(|p| self.path(p)),
+            None => self.reads(&l.reads),
+        }
+    }
+
+    /// Adds the paths of `reads`, walking the `let`s they name without recursion.
+    fn reads(&mut self, reads: &'e [Read]) -> bool {
+        let mut stack: Vec<(&[Read], usize)> = vec![(reads, 0)];
+        while let Some((list, i)) = stack.pop() {
+            let Some(r) = list.get(i) else { continue };
+            stack.push((list, i + 1));
+            match r {
+                Read::Path(p) => {
+                    if !self.path(p) {
+                        return false;
+                    }
                 }
-                match &l.0.paths {
-                    Some(ps) => ps,
-                    None => {
-                        stack.push((&l.0.reads, 0));
+                Read::Let(l) => {
+                    if !self.seen_lets.insert(Arc::as_ptr(&l.0)) {
                         continue;
+                    }
+                    match &l.0.paths {
+                        Some(ps) => {
+                            if !ps.iter().all(|p| self.path(p)) {
+                                return false;
+                            }
+                        }
+                        None => stack.push((&l.0.reads, 0)),
                     }
                 }
             }
-        };
-        for p in more {
-            if seen_paths.insert(p) {
-                if paths.len() == limit {
-                    return None;
-                }
-                paths.push(p.clone());
-            }
         }
+        true
     }
-    Some(paths)
-}
-
-fn collect_paths(reads: &[Read]) -> Vec<Path> {
-    collect_paths_upto(reads, usize::MAX).unwrap_or_default()
 }
 
 /// A set that is a short list while small (most expressions read a path or two: no hashing,
 /// no allocation until the second element) and a hash set past [`Seen::LIST`] elements.
 struct Seen<T> {
     list: Vec<T>,
-    set: HashSet<T>,
+    set: crate::passes::FastSet<T>,
 }
 
 impl<T> Default for Seen<T> {
     fn default() -> Seen<T> {
-        Seen { list: Vec::new(), set: HashSet::new() }
+        Seen { list: Vec::new(), set: Default::default() }
     }
 }
 

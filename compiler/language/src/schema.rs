@@ -107,7 +107,9 @@ impl Property {
     /// The language type of this property (always possibly absent).
     pub fn ty(&self) -> Type {
         let kind = match self.kind {
-            ValueKind::Int | ValueKind::Float => TypeKind::Number { unit: self.units.clone() },
+            ValueKind::Int | ValueKind::Float => {
+                TypeKind::Number { unit: self.units.as_deref().map(crate::types::Name::new) }
+            }
             ValueKind::Bool => TypeKind::Bool,
             ValueKind::String => TypeKind::String,
             _ => TypeKind::Dynamic,

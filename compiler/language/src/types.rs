@@ -12,12 +12,30 @@
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+/// A unit (`kn`, `px`) or an object type name (`usv`): interned, so that a [`Type`] is a few
+/// bytes, copied for free, and typing a literal allocates nothing. Written as its text.
+pub type Name = mocu_value::PropName;
+
+/// `px`, `%` and `deg`, the units of literals, interned once.
+pub fn literal_unit(u: &'static str) -> Name {
+    use std::sync::LazyLock;
+    static PX: LazyLock<Name> = LazyLock::new(|| Name::new("px"));
+    static PERCENT: LazyLock<Name> = LazyLock::new(|| Name::new("%"));
+    static DEG: LazyLock<Name> = LazyLock::new(|| Name::new("deg"));
+    match u {
+        "px" => *PX,
+        "%" => *PERCENT,
+        "deg" => *DEG,
+        other => Name::new(other),
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase", tag = "kind")]
 pub enum TypeKind {
     Number {
         #[serde(skip_serializing_if = "Option::is_none", default)]
-        unit: Option<String>,
+        unit: Option<Name>,
     },
     Bool,
     String,
@@ -25,12 +43,12 @@ pub enum TypeKind {
     Duration,
     Range {
         #[serde(skip_serializing_if = "Option::is_none", default)]
-        unit: Option<String>,
+        unit: Option<Name>,
     },
     /// An object of the world model; its schema type when known.
     Object {
         #[serde(skip_serializing_if = "Option::is_none", default)]
-        object_type: Option<String>,
+        object_type: Option<Name>,
     },
     /// A path whose type is only known at run time (no schema).
     Dynamic,
@@ -40,7 +58,7 @@ pub enum TypeKind {
     Error,
 }
 
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 pub struct Type {
     #[serde(flatten)]
     pub kind: TypeKind,
@@ -56,7 +74,7 @@ impl Type {
     pub fn number() -> Type {
         Type::new(TypeKind::Number { unit: None })
     }
-    pub fn number_in(unit: Option<String>) -> Type {
+    pub fn number_in(unit: Option<Name>) -> Type {
         Type::new(TypeKind::Number { unit })
     }
     pub const BOOL: Type = Type::new(TypeKind::Bool);
@@ -86,7 +104,7 @@ impl Type {
     }
     pub fn unit(&self) -> Option<&str> {
         match &self.kind {
-            TypeKind::Number { unit } | TypeKind::Range { unit } => unit.as_deref(),
+            TypeKind::Number { unit } | TypeKind::Range { unit } => unit.map(Name::as_str),
             _ => None,
         }
     }

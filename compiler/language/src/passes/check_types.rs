@@ -21,11 +21,13 @@ use crate::diagnostics::Diagnostics;
 use crate::program::*;
 use crate::schema::{Lookup, Schema};
 use crate::source::Span;
-use crate::types::{Type, TypeKind};
+use crate::types::{Name, Type, TypeKind, literal_unit};
 
 /// A component's parameters as (name, type, default), its events, and whether it is native.
-type Signature = (Vec<(String, Type, Option<Bound>)>, Vec<String>, bool);
-use std::collections::HashMap;
+/// Names are borrowed from the syntax trees (or built in).
+type Signature<'a> = (Vec<(&'a str, Type, Option<Bound>)>, Vec<&'a str>, bool);
+use super::FastMap;
+use std::rc::Rc;
 
 pub fn check_types(
     modules: &Modules,
@@ -38,12 +40,12 @@ pub fn check_types(
         defs,
         schema,
         diags,
-        top_lets: HashMap::new(),
+        top_lets: FastMap::default(),
         lets_lowered: vec![0; modules.len()],
         lets: Vec::new(),
         program: Program::default(),
         mode_refs: Vec::new(),
-        signatures: HashMap::new(),
+        signatures: FastMap::default(),
     };
     t.program.files = modules.iter().map(|m| m.path.clone()).collect();
     for m in 0..modules.len() {
@@ -55,18 +57,19 @@ pub fn check_types(
 }
 
 #[derive(Clone, Default)]
-struct Scope {
+struct Scope<'a> {
     module: ModuleId,
     limit: Option<usize>,
-    /// Names in scope with their values (a `let`'s: what its uses get, see `bind_let`).
-    locals: Vec<(String, Expr)>,
+    /// Names in scope with their values (a `let`'s: what its uses get, see `bind_let`);
+    /// names are borrowed from the syntax trees (or built in).
+    locals: Vec<(&'a str, Expr)>,
     self_type: Option<Option<String>>,
 }
 
-impl Scope {
-    fn with(&self, name: &str, e: Expr) -> Scope {
+impl<'a> Scope<'a> {
+    fn with(&self, name: &'a str, e: Expr) -> Scope<'a> {
         let mut s = self.clone();
-        s.locals.push((name.to_string(), e));
+        s.locals.push((name, e));
         s
     }
 }
@@ -77,7 +80,7 @@ struct Typer<'a, 'd> {
     schema: &'a Schema,
     diags: &'d mut Diagnostics,
     /// Top-level `let`s, each checked once: what their uses get (see `bind_let`).
-    top_lets: HashMap<DefId, Expr>,
+    top_lets: FastMap<DefId, Expr>,
     /// Per module, how many of its items have had their `let`s checked (in order).
     lets_lowered: Vec<usize>,
     /// The program's `let`s so far.
@@ -87,7 +90,7 @@ struct Typer<'a, 'd> {
     mode_refs: Vec<(String, Span)>,
     /// Each component's signature, worked out once per module that uses it (its defaults
     /// lowered once, not once per widget).
-    signatures: HashMap<(ModuleId, String), Option<Signature>>,
+    signatures: FastMap<(ModuleId, &'a str), Option<Rc<Signature<'a>>>>,
 }
 
 /// Where windows, widgets and watches go: the program, or a template.
@@ -103,15 +106,19 @@ fn anchor_of(name: Option<&ast::Ident>) -> crate::placement::Anchor {
     name.and_then(|n| crate::placement::Anchor::parse(&n.name)).unwrap_or_default()
 }
 
+/// What a value is for, in messages ("`value` of Dial"): formatted only when reported.
+type What<'x> = &'x dyn std::fmt::Display;
+
 fn mk(ty: Type, node: Node, span: Span) -> Expr {
     Expr { ty, node, span }
 }
 
-impl Typer<'_, '_> {
+impl<'a> Typer<'a, '_> {
     fn module(&mut self, m: ModuleId) {
         let base = Scope { module: m, ..Scope::default() };
         let mut sink = Sink::default();
-        for (i, item) in self.modules[m].ast.items.iter().enumerate() {
+        let modules = self.modules;
+        for (i, item) in modules[m].ast.items.iter().enumerate() {
             if let Item::Let(_) = item {
                 // Checked even when unused; uses refer to this result.
                 self.lower_top_let(DefId { module: m, item: i, inner: None });
@@ -123,7 +130,7 @@ impl Typer<'_, '_> {
         self.program.watches.append(&mut sink.watches);
     }
 
-    fn item(&mut self, item: &Item, scope: &Scope, sink: &mut Sink) {
+    fn item(&mut self, item: &'a Item, scope: &Scope<'a>, sink: &mut Sink) {
         match item {
             Item::Use(_) | Item::Let(_) | Item::Design(_) => {}
             Item::Window(w) => {
@@ -190,9 +197,10 @@ impl Typer<'_, '_> {
                     .entries
                     .iter()
                     .map(|e| {
-                        let label = self.expect(&e.label, &s, &Type::STRING, "a menu item's label");
+                        let label =
+                            self.expect(&e.label, &s, &Type::STRING, &"a menu item's label");
                         let enabled =
-                            e.enabled.as_ref().map(|x| self.condition(x, &s, "`enabled`"));
+                            e.enabled.as_ref().map(|x| self.condition(x, &s, &"`enabled`"));
                         MenuItem { label, enabled, actions: self.actions(&e.actions, &s) }
                     })
                     .collect();
@@ -203,19 +211,19 @@ impl Typer<'_, '_> {
                 });
             }
             Item::Watch(w) => {
-                let when = self.condition(&w.when, scope, "a watch's `when`");
+                let when = self.condition(&w.when, scope, &"a watch's `when`");
                 let hold_ms = w.hold.as_ref().and_then(|h| {
-                    let b = self.expect(h, scope, &Type::DURATION, "a hold time (`for 5s`)");
+                    let b = self.expect(h, scope, &Type::DURATION, &"a hold time (`for 5s`)");
                     super::check_durations::check_duration(&b.expr, Use::Hold, self.diags)
                 });
                 let clear =
-                    w.clear.as_ref().map(|c| self.condition(c, scope, "a watch's `clear when`"));
+                    w.clear.as_ref().map(|c| self.condition(c, scope, &"a watch's `clear when`"));
                 let repeat_ms = w.repeat.as_ref().and_then(|r| {
                     let b = self.expect(
                         r,
                         scope,
                         &Type::DURATION,
-                        "a repeat period (`repeat every 30s`)",
+                        &"a repeat period (`repeat every 30s`)",
                     );
                     super::check_durations::check_duration(&b.expr, Use::Repeat, self.diags)
                 });
@@ -257,7 +265,9 @@ impl Typer<'_, '_> {
                     }
                     t.clone()
                 });
-                let var_ty = Type::new(TypeKind::Object { object_type: object_type.clone() });
+                let var_ty = Type::new(TypeKind::Object {
+                    object_type: object_type.as_deref().map(Name::new),
+                });
                 let var = mk(
                     var_ty,
                     Node::Path(Path {
@@ -275,7 +285,7 @@ impl Typer<'_, '_> {
                     if let Item::Let(l) = it {
                         let v = self.lower(&l.value, &s);
                         let v = self.bind_let(&l.name.name, v);
-                        s.locals.push((l.name.name.clone(), v));
+                        s.locals.push((&l.name.name, v));
                     } else {
                         self.item(it, &s, &mut inner);
                     }
@@ -293,7 +303,7 @@ impl Typer<'_, '_> {
         }
     }
 
-    fn window(&mut self, w: &ast::Window, scope: &Scope) -> Window {
+    fn window(&mut self, w: &ast::Window, scope: &Scope<'a>) -> Window {
         let span = w.span;
         let konst = |n: f64| Bound::new(mk(Type::number(), Node::Number(n), span));
         let mut win = Window {
@@ -303,8 +313,8 @@ impl Typer<'_, '_> {
             rect: vec![
                 konst(0.0),
                 konst(0.0),
-                Bound::new(mk(Type::number_in(Some("%".into())), Node::Number(100.0), span)),
-                Bound::new(mk(Type::number_in(Some("%".into())), Node::Number(100.0), span)),
+                Bound::new(mk(Type::number_in(Some(literal_unit("%"))), Node::Number(100.0), span)),
+                Bound::new(mk(Type::number_in(Some(literal_unit("%"))), Node::Number(100.0), span)),
             ],
             anchor: anchor_of(w.anchor.as_ref()),
             opacity: konst(1.0),
@@ -318,9 +328,9 @@ impl Typer<'_, '_> {
         for p in &w.props {
             let Some(want) = builtins::window_prop_type(&p.name.name) else { continue };
             let b = if want.kind == TypeKind::Bool {
-                self.condition(&p.value, scope, "`visible`")
+                self.condition(&p.value, scope, &"`visible`")
             } else {
-                self.expect(&p.value, scope, &want, &format!("a window's `{}`", p.name.name))
+                self.expect(&p.value, scope, &want, &format_args!("a window's `{}`", p.name.name))
             };
             match p.name.name.as_str() {
                 "layer" => win.layer = b,
@@ -339,10 +349,10 @@ impl Typer<'_, '_> {
         win
     }
 
-    fn geometry(&mut self, e: &ast::Expr, scope: &Scope) -> Bound {
+    fn geometry(&mut self, e: &ast::Expr, scope: &Scope<'a>) -> Bound {
         let b = self.lower(e, scope);
         if !b.ty.is_numeric() {
-            self.not_a_number(&b, "a position or size");
+            self.not_a_number(&b, &"a position or size");
         } else if let Some(u) = b.ty.unit()
             && u != "%"
             && u != "px"
@@ -359,45 +369,50 @@ impl Typer<'_, '_> {
     }
 
     /// The component's parameters as (name, type, default), its events, and whether native.
-    fn signature(&mut self, module: ModuleId, name: &str) -> Option<Signature> {
-        if let Some(known) = self.signatures.get(&(module, name.to_string())) {
+    fn signature(&mut self, module: ModuleId, name: &'a str) -> Option<Rc<Signature<'a>>> {
+        if let Some(known) = self.signatures.get(&(module, name)) {
             return known.clone();
         }
-        let sig = self.work_out_signature(module, name);
-        self.signatures.insert((module, name.to_string()), sig.clone());
+        let sig = self.work_out_signature(module, name).map(Rc::new);
+        self.signatures.insert((module, name), sig.clone());
         sig
     }
 
-    fn work_out_signature(&mut self, module: ModuleId, name: &str) -> Option<Signature> {
+    fn work_out_signature(&mut self, module: ModuleId, name: &str) -> Option<Signature<'a>> {
         if let Some(n) = builtins::native(name) {
             let params = n
                 .params
                 .iter()
                 .map(|(p, t, d)| {
                     let ty = Type::parse_name(t).unwrap_or(Type::DYNAMIC).maybe_absent(*d);
-                    (p.to_string(), ty, None)
+                    (*p, ty, None)
                 })
                 .collect();
-            return Some((params, n.events.iter().map(|e| e.to_string()).collect(), true));
+            return Some((params, n.events.to_vec(), true));
         }
         let id = self.defs.find_component(self.modules, module, name)?;
         let c = component_item(self.modules, id)?;
         let (params, events) = self.params(c, id.module, false);
-        Some((params.into_iter().map(|p| (p.name, p.ty, p.default)).collect(), events, false))
+        let names = c.params.iter().filter_map(|p| match p {
+            ast::Param::Value { name, .. } => Some(name.name.as_str()),
+            ast::Param::Event { .. } => None,
+        });
+        let params = names.zip(params).map(|(n, p)| (n, p.ty, p.default)).collect();
+        Some((params, events.iter().map(|e| e.as_str()).collect(), false))
     }
 
     fn params(
         &mut self,
-        c: &ast::Component,
+        c: &'a ast::Component,
         module: ModuleId,
         report: bool,
-    ) -> (Vec<Param>, Vec<String>) {
+    ) -> (Vec<Param>, Vec<&'a String>) {
         let scope = Scope { module, ..Scope::default() };
         let mut params = Vec::new();
         let mut events = Vec::new();
         for p in &c.params {
             match p {
-                ast::Param::Event { name } => events.push(name.name.clone()),
+                ast::Param::Event { name } => events.push(&name.name),
                 ast::Param::Value { name, ty, default } => {
                     let declared = ty.as_ref().map(|t| match Type::parse_name(&t.name.name) {
                         Some(ty) => ty.maybe_absent(t.optional),
@@ -419,12 +434,16 @@ impl Typer<'_, '_> {
                             self.quiet(|t| t.lower(d, &scope))
                         };
                         if report && let Some(want) = &declared {
-                            self.check_fits(&b, want, &format!("the default of `{}`", name.name));
+                            self.check_fits(
+                                &b,
+                                want,
+                                &format_args!("the default of `{}`", name.name),
+                            );
                         }
                         Bound::new(b)
                     });
                     let ty = declared
-                        .or_else(|| default.as_ref().map(|d| d.expr.ty.clone()))
+                        .or_else(|| default.as_ref().map(|d| d.expr.ty))
                         .unwrap_or(Type::DYNAMIC);
                     params.push(Param { name: name.name.clone(), ty, default });
                 }
@@ -434,7 +453,7 @@ impl Typer<'_, '_> {
     }
 
     /// Runs `f` with diagnostics discarded (re-lowering something already checked).
-    fn quiet<R>(&mut self, f: impl FnOnce(&mut Typer<'_, '_>) -> R) -> R {
+    fn quiet<R>(&mut self, f: impl FnOnce(&mut Typer<'a, '_>) -> R) -> R {
         let mut scratch = Diagnostics::new();
         let mut t = Typer {
             modules: self.modules,
@@ -456,23 +475,22 @@ impl Typer<'_, '_> {
         r
     }
 
-    fn widget(&mut self, w: &ast::Widget, window: &str, scope: &Scope) -> Option<Widget> {
+    fn widget(&mut self, w: &'a ast::Widget, window: &str, scope: &Scope<'a>) -> Option<Widget> {
         let at =
             w.at.as_ref()
                 .map(|(a, _)| a.iter().map(|g| self.geometry(g, scope)).collect())
                 .unwrap_or_default();
-        let (params, events, native) = self.signature(scope.module, &w.component.name)?;
+        let sig = self.signature(scope.module, &w.component.name)?;
+        let (params, events, native) = &*sig;
         let mut arg_scope = scope.clone();
-        for (name, ty, _) in &params {
-            arg_scope
-                .locals
-                .push((name.clone(), mk(ty.clone(), Node::Param(name.clone()), w.span)));
+        for (name, ty, _) in params {
+            arg_scope.locals.push((name, mk(*ty, Node::Param(name.to_string()), w.span)));
         }
         let mut args = Vec::new();
         let mut visible = None;
         for (i, a) in w.args.iter().enumerate() {
             if a.name.name == "visible" {
-                visible = Some(self.condition(&a.value, &arg_scope, "`visible`"));
+                visible = Some(self.condition(&a.value, &arg_scope, &"`visible`"));
                 continue;
             }
             let Some((_, ty, _)) = params.iter().find(|(n, ..)| *n == a.name.name) else {
@@ -480,36 +498,36 @@ impl Typer<'_, '_> {
             };
             // `range 0 to 40`: the `to 40` that follows is the one diagnostic (resolve_names).
             if matches!(ty.kind, TypeKind::Range { .. })
-                && w.args
-                    .get(i + 1)
-                    .is_some_and(|n| n.name.name == "to" && !params.iter().any(|(p, ..)| p == "to"))
+                && w.args.get(i + 1).is_some_and(|n| {
+                    n.name.name == "to" && !params.iter().any(|(p, ..)| *p == "to")
+                })
             {
                 self.lower(&a.value, &arg_scope);
                 continue;
             }
             let b = if ty.kind == TypeKind::Bool {
-                self.condition(&a.value, &arg_scope, &format!("`{}`", a.name.name))
+                self.condition(&a.value, &arg_scope, &format_args!("`{}`", a.name.name))
             } else {
                 self.expect(
                     &a.value,
                     &arg_scope,
                     ty,
-                    &format!("`{}` of {}", a.name.name, w.component.name),
+                    &format_args!("`{}` of {}", a.name.name, w.component.name),
                 )
             };
             args.push(Arg { name: a.name.name.clone(), value: read_as(b, ty) });
         }
         for (name, ty, default) in params {
-            if !args.iter().any(|a: &Arg| a.name == name)
+            if !args.iter().any(|a: &Arg| a.name == *name)
                 && let Some(d) = default
             {
-                args.push(Arg { name, value: read_as(d, &ty) });
+                args.push(Arg { name: name.to_string(), value: read_as(d.clone(), ty) });
             }
         }
         let handlers = w
             .handlers
             .iter()
-            .filter(|h| events.contains(&h.event.name))
+            .filter(|h| events.contains(&h.event.name.as_str()))
             .map(|h| Handler {
                 event: h.event.name.clone(),
                 actions: self.actions(&h.actions, scope),
@@ -519,7 +537,7 @@ impl Typer<'_, '_> {
             name: w.name.as_ref().map(|n| n.name.clone()),
             window: window.to_string(),
             component: w.component.name.clone(),
-            native,
+            native: *native,
             at,
             anchor: anchor_of(w.anchor.as_ref()),
             args,
@@ -529,12 +547,16 @@ impl Typer<'_, '_> {
         })
     }
 
-    fn component(&mut self, c: &ast::Component, module: ModuleId) -> Component {
+    fn component(&mut self, c: &'a ast::Component, module: ModuleId) -> Component {
         let (params, events) = self.params(c, module, true);
         let mut s = Scope { module, ..Scope::default() }
             .with("w", mk(Type::number(), Node::Size("w".into()), c.span))
             .with("h", mk(Type::number(), Node::Size("h".into()), c.span));
-        for p in &params {
+        let names = c.params.iter().filter_map(|p| match p {
+            ast::Param::Value { name, .. } => Some(name.name.as_str()),
+            ast::Param::Event { .. } => None,
+        });
+        for (name, p) in names.zip(&params) {
             let node = if matches!(p.ty.kind, TypeKind::Object { .. }) {
                 Node::Path(Path {
                     base: PathBase::Param(p.name.clone()),
@@ -544,7 +566,7 @@ impl Typer<'_, '_> {
             } else {
                 Node::Param(p.name.clone())
             };
-            s.locals.push((p.name.clone(), mk(p.ty.clone(), node, c.span)));
+            s.locals.push((name, mk(p.ty, node, c.span)));
         }
         let mut shapes = Vec::new();
         for stmt in &c.body {
@@ -552,7 +574,7 @@ impl Typer<'_, '_> {
                 ast::Stmt::Let(l) => {
                     let v = self.lower(&l.value, &s);
                     let v = self.bind_let(&l.name.name, v);
-                    s.locals.push((l.name.name.clone(), v));
+                    s.locals.push((&l.name.name, v));
                 }
                 ast::Stmt::Primitive(p) => {
                     if let Some(shape) = self.primitive(p, &s) {
@@ -561,10 +583,11 @@ impl Typer<'_, '_> {
                 }
             }
         }
+        let events = events.into_iter().cloned().collect();
         Component { name: c.name.name.clone(), params, events, shapes, span: c.span }
     }
 
-    fn primitive(&mut self, p: &ast::Primitive, s: &Scope) -> Option<Shape> {
+    fn primitive(&mut self, p: &ast::Primitive, s: &Scope<'a>) -> Option<Shape> {
         let Some(def) = builtins::primitive(&p.kind.name) else {
             self.diags
                 .error(
@@ -600,10 +623,15 @@ impl Typer<'_, '_> {
             .iter()
             .enumerate()
             .map(|(i, a)| match def.args.as_bytes()[i % n] {
-                b'n' => {
-                    self.expect(a, s, &Type::number(), &format!("an argument of `{}`", def.name))
+                b'n' => self.expect(
+                    a,
+                    s,
+                    &Type::number(),
+                    &format_args!("an argument of `{}`", def.name),
+                ),
+                b's' => {
+                    self.expect(a, s, &Type::STRING, &format_args!("an argument of `{}`", def.name))
                 }
-                b's' => self.expect(a, s, &Type::STRING, &format!("an argument of `{}`", def.name)),
                 _ => {
                     let b = self.lower(a, s);
                     self.check_showable(&b);
@@ -624,9 +652,9 @@ impl Typer<'_, '_> {
                 continue;
             };
             let v = if want.kind == TypeKind::Bool {
-                self.condition(&st.value, s, "`visible`")
+                self.condition(&st.value, s, &"`visible`")
             } else {
-                self.expect(&st.value, s, &want, &format!("`{}`", st.name.name))
+                self.expect(&st.value, s, &want, &format_args!("`{}`", st.name.name))
             };
             styles.push(Arg { name: st.name.name.clone(), value: v });
         }
@@ -699,7 +727,7 @@ impl Typer<'_, '_> {
         }
     }
 
-    fn actions(&mut self, actions: &[ast::Action], scope: &Scope) -> Vec<Action> {
+    fn actions(&mut self, actions: &[ast::Action], scope: &Scope<'a>) -> Vec<Action> {
         let mut out = Vec::new();
         for a in actions {
             let span = a.span;
@@ -709,7 +737,7 @@ impl Typer<'_, '_> {
                     let v = self.lower(value, scope);
                     match t.node {
                         Node::Path(p) => {
-                            self.check_fits(&v, &t.ty.clone().present(), "the value to `set`");
+                            self.check_fits(&v, &t.ty.present(), &"the value to `set`");
                             out.push(Action::Set { target: p, value: Bound::new(v), span });
                         }
                         _ => {
@@ -748,7 +776,7 @@ impl Typer<'_, '_> {
                     let duration_ms = duration
                         .as_ref()
                         .and_then(|d| {
-                            let b = self.expect(d, scope, &Type::DURATION, "a swap's duration");
+                            let b = self.expect(d, scope, &Type::DURATION, &"a swap's duration");
                             super::check_durations::check_duration(&b.expr, Use::Swap, self.diags)
                         })
                         .unwrap_or(250.0);
@@ -766,7 +794,7 @@ impl Typer<'_, '_> {
                     out.push(Action::Hide { window: window.name.clone(), span })
                 }
                 ast::ActionKind::Alert { level, message } => {
-                    let m = self.expect(message, scope, &Type::STRING, "an alert message");
+                    let m = self.expect(message, scope, &Type::STRING, &"an alert message");
                     out.push(Action::Alert { level: level.name.clone(), message: m, span });
                 }
                 ast::ActionKind::Mode { mode } => {
@@ -807,13 +835,13 @@ impl Typer<'_, '_> {
 
     // ---- expressions ------------------------------------------------------------------
 
-    fn expect(&mut self, e: &ast::Expr, scope: &Scope, want: &Type, what: &str) -> Bound {
+    fn expect(&mut self, e: &ast::Expr, scope: &Scope<'a>, want: &Type, what: What) -> Bound {
         let b = self.lower(e, scope);
         self.check_fits(&b, want, what);
         Bound::new(b)
     }
 
-    fn check_fits(&mut self, b: &Expr, want: &Type, what: &str) {
+    fn check_fits(&mut self, b: &Expr, want: &Type, what: What) {
         if b.ty.fits(want) {
             if let (Some(have), Some(w)) = (b.ty.unit(), want.unit())
                 && have != w
@@ -835,7 +863,7 @@ impl Typer<'_, '_> {
         let d = self.diags.error(
             codes::TYPE_MISMATCH,
             b.span,
-            format!("{what} must be a {}, but this is a {}", want.clone().present(), b.ty),
+            format!("{what} must be a {}, but this is a {}", (*want).present(), b.ty),
         );
         d.label(format!("this is a {}", b.ty));
         if want.kind == TypeKind::String && b.ty.is_numeric() {
@@ -846,23 +874,23 @@ impl Typer<'_, '_> {
         }
     }
 
-    fn not_a_number(&mut self, b: &Expr, what: &str) {
+    fn not_a_number(&mut self, b: &Expr, what: What) {
         let d = self.diags.error(
             codes::NOT_A_NUMBER,
             b.span,
-            format!("a {} is used as a number", b.ty.clone().present()),
+            format!("a {} is used as a number", b.ty.present()),
         );
         d.label(format!("this is a {}", b.ty));
+        let what = what.to_string();
         if what != "an operand" {
-            d.message =
-                format!("{what} must be a number, but this is a {}", b.ty.clone().present());
+            d.message = format!("{what} must be a number, but this is a {}", b.ty.present());
         }
         if b.ty.kind == TypeKind::Bool {
             d.help("use `if … then 1 else 0` to turn a condition into a number");
         }
     }
 
-    fn condition(&mut self, e: &ast::Expr, scope: &Scope, what: &str) -> Bound {
+    fn condition(&mut self, e: &ast::Expr, scope: &Scope<'a>, what: What) -> Bound {
         let b = self.lower(e, scope);
         if !b.ty.is_bool() {
             self.diags
@@ -930,7 +958,7 @@ impl Typer<'_, '_> {
         if copied {
             return value;
         }
-        let (ty, span) = (value.ty.clone(), value.span);
+        let (ty, span) = (value.ty, value.span);
         let l = Let::shared(self.lets.len() as u32, name.to_string(), value);
         self.lets.push(l.clone());
         mk(ty, Node::Let(l), span)
@@ -950,20 +978,20 @@ impl Typer<'_, '_> {
         match self.schema.lookup(p.base_type.as_deref(), from_root, &p.segments) {
             Lookup::Property(prop) => prop.ty(),
             Lookup::Object(t) => {
-                Type { kind: TypeKind::Object { object_type: Some(t.to_string()) }, absent: true }
+                Type { kind: TypeKind::Object { object_type: Some(Name::new(t)) }, absent: true }
             }
             Lookup::Method(_) => Type::VOID,
             Lookup::Untyped | Lookup::Unknown { .. } => Type::DYNAMIC,
         }
     }
 
-    fn lower(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
+    fn lower(&mut self, e: &ast::Expr, scope: &Scope<'a>) -> Expr {
         // Nesting up to the depth limit takes ~9 KiB of stack a level in a debug build: more
         // than a 2 MiB thread has. Grow the stack when less than 64 KiB is left.
         stacker::maybe_grow(64 * 1024, 1024 * 1024, || self.lower_node(e, scope))
     }
 
-    fn lower_node(&mut self, e: &ast::Expr, scope: &Scope) -> Expr {
+    fn lower_node(&mut self, e: &ast::Expr, scope: &Scope<'a>) -> Expr {
         let span = e.span;
         match &e.kind {
             ExprKind::Number { value, unit } => match unit {
@@ -971,13 +999,13 @@ impl Typer<'_, '_> {
                 Some(LitUnit::S) => mk(Type::DURATION, Node::Duration(value * 1000.0), span),
                 Some(LitUnit::Min) => mk(Type::DURATION, Node::Duration(value * 60_000.0), span),
                 Some(LitUnit::Px) => {
-                    mk(Type::number_in(Some("px".into())), Node::Number(*value), span)
+                    mk(Type::number_in(Some(literal_unit("px"))), Node::Number(*value), span)
                 }
                 Some(LitUnit::Deg) => {
-                    mk(Type::number_in(Some("deg".into())), Node::Number(*value), span)
+                    mk(Type::number_in(Some(literal_unit("deg"))), Node::Number(*value), span)
                 }
                 Some(LitUnit::Percent) => {
-                    mk(Type::number_in(Some("%".into())), Node::Number(*value), span)
+                    mk(Type::number_in(Some(literal_unit("%"))), Node::Number(*value), span)
                 }
                 None => mk(Type::number(), Node::Number(*value), span),
             },
@@ -987,7 +1015,10 @@ impl Typer<'_, '_> {
             ExprKind::Str(parts) => self.string(parts, scope, span),
             ExprKind::SelfRef => match &scope.self_type {
                 Some(t) => mk(
-                    Type { kind: TypeKind::Object { object_type: t.clone() }, absent: true },
+                    Type {
+                        kind: TypeKind::Object { object_type: t.as_deref().map(Name::new) },
+                        absent: true,
+                    },
                     Node::Path(Path {
                         base: PathBase::SelfObject,
                         segments: vec![],
@@ -1072,14 +1103,13 @@ impl Typer<'_, '_> {
                 let ty = match op {
                     UnOp::Neg => {
                         if matches!(a.ty.kind, TypeKind::Duration) {
-                            a.ty.clone()
+                            a.ty
                         } else {
                             if !a.ty.is_numeric() {
-                                self.not_a_number(&a, "an operand");
+                                self.not_a_number(&a, &"an operand");
                             }
                             if a.ty.is_numeric() {
-                                Type::number_in(a.ty.unit().map(str::to_string))
-                                    .maybe_absent(a.ty.absent)
+                                Type::number_in(unit_of(&a.ty)).maybe_absent(a.ty.absent)
                             } else {
                                 Type::ERROR
                             }
@@ -1123,9 +1153,9 @@ impl Typer<'_, '_> {
                 let a = self.lower(a, scope);
                 let b = self.lower(b, scope);
                 let ty = if a.ty.is_lenient() {
-                    b.ty.clone().maybe_absent(a.ty.absent)
+                    b.ty.maybe_absent(a.ty.absent)
                 } else if b.ty.is_lenient() || a.ty.fits(&b.ty) {
-                    a.ty.clone().maybe_absent(b.ty.absent)
+                    a.ty.maybe_absent(b.ty.absent)
                 } else {
                     self.diags
                         .error(
@@ -1175,8 +1205,7 @@ impl Typer<'_, '_> {
             _ if matches!(base.ty.kind, TypeKind::Range { .. })
                 && (name == "min" || name == "max") =>
             {
-                let ty = Type::number_in(base.ty.unit().map(str::to_string))
-                    .maybe_absent(base.ty.absent);
+                let ty = Type::number_in(unit_of(&base.ty)).maybe_absent(base.ty.absent);
                 let max = name == "max";
                 mk(ty, Node::RangeEnd { range: Box::new(base), max }, span)
             }
@@ -1219,7 +1248,7 @@ impl Typer<'_, '_> {
             absent |= a.ty.absent;
             match kind {
                 b'n' if !a.ty.is_numeric() => {
-                    self.not_a_number(a, &format!("an argument of `{f}`"))
+                    self.not_a_number(a, &format_args!("an argument of `{f}`"))
                 }
                 b's' if !a.ty.fits(&Type::STRING) => {
                     self.diags.error(
@@ -1237,11 +1266,11 @@ impl Typer<'_, '_> {
         {
             self.bad_spec(*span, spec);
         }
-        let first_unit = args.first().and_then(|a| a.ty.unit().map(str::to_string));
+        let first_unit = args.first().and_then(|a| unit_of(&a.ty));
         let ty = match def.returns {
             Returns::SameUnit => Type::number_in(first_unit),
             Returns::Unitless => Type::number(),
-            Returns::Unit(u) => Type::number_in(Some(u.to_string())),
+            Returns::Unit(u) => Type::number_in(Some(Name::new(u))),
             Returns::String => Type::STRING,
             Returns::Colour => Type::COLOUR,
             Returns::Bool => {
@@ -1258,7 +1287,7 @@ impl Typer<'_, '_> {
             .help("a spec is `[0][width][.digits]`, e.g. `.1` (one decimal) or `03.0` (three digits, zero-padded)");
     }
 
-    fn string(&mut self, parts: &[StrPart], scope: &Scope, span: Span) -> Expr {
+    fn string(&mut self, parts: &[StrPart], scope: &Scope<'a>, span: Span) -> Expr {
         if let [StrPart::Text(t)] = parts {
             return mk(Type::STRING, Node::Str(t.clone()), span);
         }
@@ -1297,14 +1326,14 @@ impl Typer<'_, '_> {
             BinOp::Coalesce => {
                 if !lenient && !a.ty.fits(&b.ty) {
                     self.diags
-                        .error(codes::TYPE_MISMATCH, b.span, format!("the default after `??` must be a {} like the value before it, but this is a {}", a.ty.clone().present(), b.ty))
+                        .error(codes::TYPE_MISMATCH, b.span, format!("the default after `??` must be a {} like the value before it, but this is a {}", a.ty.present(), b.ty))
                         .label(format!("this is a {}", b.ty));
                     return Type::ERROR;
                 }
-                let base = if a.ty.is_lenient() { b.ty.clone() } else { a.ty.clone() };
+                let base = if a.ty.is_lenient() { b.ty } else { a.ty };
                 let mut t = base.present().maybe_absent(b.ty.absent);
-                if let (TypeKind::Number { unit: None }, Some(u)) = (&t.kind, b.ty.unit()) {
-                    t.kind = TypeKind::Number { unit: Some(u.to_string()) };
+                if let (TypeKind::Number { unit: None }, Some(u)) = (&t.kind, unit_of(&b.ty)) {
+                    t.kind = TypeKind::Number { unit: Some(u) };
                 }
                 t
             }
@@ -1386,14 +1415,14 @@ impl Typer<'_, '_> {
     fn numeric_operands(&mut self, a: &Expr, b: &Expr) {
         for x in [a, b] {
             if !x.ty.is_numeric() {
-                self.not_a_number(x, "an operand");
+                self.not_a_number(x, &"an operand");
             }
         }
     }
 
     /// Checks that both sides have the same unit when both have one; returns the result unit.
-    fn same_unit(&mut self, op: BinOp, a: &Expr, b: &Expr) -> Option<String> {
-        match (a.ty.unit(), b.ty.unit()) {
+    fn same_unit(&mut self, op: BinOp, a: &Expr, b: &Expr) -> Option<Name> {
+        match (unit_of(&a.ty), unit_of(&b.ty)) {
             (Some(x), Some(y)) if x != y => {
                 self.diags
                     .error(
@@ -1407,7 +1436,7 @@ impl Typer<'_, '_> {
                     ));
                 None
             }
-            (Some(x), _) | (_, Some(x)) => Some(x.to_string()),
+            (Some(x), _) | (_, Some(x)) => Some(x),
             _ => None,
         }
     }
@@ -1450,7 +1479,15 @@ fn read_as(mut b: Bound, ty: &Type) -> Bound {
         TypeKind::String | TypeKind::Number { .. } | TypeKind::Bool | TypeKind::Colour
     );
     if b.expr.ty.kind == TypeKind::Dynamic && value {
-        b.expr.ty = Type { kind: ty.kind.clone(), absent: true };
+        b.expr.ty = Type { kind: ty.kind, absent: true };
     }
     b
+}
+
+/// The unit of a number or range type.
+fn unit_of(t: &Type) -> Option<Name> {
+    match t.kind {
+        TypeKind::Number { unit } | TypeKind::Range { unit } => unit,
+        _ => None,
+    }
 }

@@ -2,42 +2,26 @@
 //! windows of `for each` templates). Reports duplicates (E0203). Runs before name resolution,
 //! which looks names up in these tables.
 
-use super::{DefId, Definitions, Modules};
+use super::{DefId, Definitions, FastMap, Modules};
 use crate::ast::{Ident, Item};
 use crate::codes;
 use crate::diagnostics::Diagnostics;
-use std::collections::HashMap;
 
-pub fn collect_definitions(modules: &Modules, diags: &mut Diagnostics) -> Definitions {
+pub fn collect_definitions<'a>(modules: &'a Modules, diags: &mut Diagnostics) -> Definitions {
     let mut defs = Definitions::default();
     for (m, module) in modules.iter().enumerate() {
-        let mut lets = HashMap::new();
-        let mut components = HashMap::new();
-        let mut windows = HashMap::new();
-        let mut spans: HashMap<(u8, String), crate::source::Span> = HashMap::new();
-        let mut add = |kind: u8,
-                       table: &mut HashMap<String, DefId>,
-                       name: &Ident,
+        let mut lets = FastMap::default();
+        let mut components = FastMap::default();
+        let mut windows = FastMap::default();
+        // Per kind (let, component, window, watch): where each name was first defined.
+        let mut spans: [FastMap<&str, crate::source::Span>; 4] = Default::default();
+        let mut add = |kind: usize,
+                       table: &mut FastMap<String, DefId>,
+                       name: &'a Ident,
                        id: DefId,
                        what: &str,
                        diags: &mut Diagnostics| {
-            if name.name.is_empty() {
-                return;
-            }
-            if let Some(first) = spans.get(&(kind, name.name.clone())) {
-                diags
-                    .error(
-                        codes::DUPLICATE,
-                        name.span,
-                        format!("the {what} `{}` is defined twice", name.name),
-                    )
-                    .label("second definition")
-                    .related(*first, "first defined here")
-                    .help("rename one of them; the first definition is used");
-                return;
-            }
-            spans.insert((kind, name.name.clone()), name.span);
-            table.insert(name.name.clone(), id);
+            add_name(&mut spans[kind], table, name, id, what, diags)
         };
         for (i, item) in module.ast.items.iter().enumerate() {
             let id = DefId { module: m, item: i, inner: None };
@@ -45,7 +29,7 @@ pub fn collect_definitions(modules: &Modules, diags: &mut Diagnostics) -> Defini
                 Item::Let(l) => add(0, &mut lets, &l.name, id, "name", diags),
                 Item::Component(c) => add(1, &mut components, &c.name, id, "component", diags),
                 Item::Window(w) => add(2, &mut windows, &w.name, id, "window", diags),
-                Item::Watch(w) => add(3, &mut HashMap::new(), &w.name, id, "watch", diags),
+                Item::Watch(w) => add(3, &mut FastMap::default(), &w.name, id, "watch", diags),
                 Item::Each(e) => {
                     for (j, inner) in e.items.iter().enumerate() {
                         if let Item::Window(w) = inner {
@@ -68,4 +52,33 @@ pub fn collect_definitions(modules: &Modules, diags: &mut Diagnostics) -> Defini
         defs.windows.push(windows);
     }
     defs
+}
+
+/// Adds a top-level name to its table, or reports it as defined twice (`spans`: where each
+/// name of its kind was first defined).
+fn add_name<'a>(
+    spans: &mut FastMap<&'a str, crate::source::Span>,
+    table: &mut FastMap<String, DefId>,
+    name: &'a Ident,
+    id: DefId,
+    what: &str,
+    diags: &mut Diagnostics,
+) {
+    if name.name.is_empty() {
+        return;
+    }
+    if let Some(first) = spans.get(name.name.as_str()) {
+        diags
+            .error(
+                codes::DUPLICATE,
+                name.span,
+                format!("the {what} `{}` is defined twice", name.name),
+            )
+            .label("second definition")
+            .related(*first, "first defined here")
+            .help("rename one of them; the first definition is used");
+        return;
+    }
+    spans.insert(&name.name, name.span);
+    table.insert(name.name.clone(), id);
 }

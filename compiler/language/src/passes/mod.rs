@@ -17,7 +17,57 @@ pub mod warn_unused;
 
 use crate::ast;
 use crate::source::FileId;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// A hash map for the checker's own tables, keyed by names, spans and pointers: hashed with
+/// [`FastHasher`] (no defence against chosen collisions is needed for a layout's names,
+/// and SipHash was a tenth of the checker's time).
+pub type FastMap<K, V> = HashMap<K, V, BuildHasherDefault<FastHasher>>;
+/// A hash set hashed with [`FastHasher`].
+pub type FastSet<T> = HashSet<T, BuildHasherDefault<FastHasher>>;
+
+/// The Fx hash (rustc's): a rotate, an xor and a multiply per word.
+#[derive(Clone, Copy, Default)]
+pub struct FastHasher(u64);
+
+impl FastHasher {
+    const K: u64 = 0xf135_7aea_2e62_a9c5;
+    fn add(&mut self, word: u64) {
+        self.0 = (self.0.rotate_left(5) ^ word).wrapping_mul(Self::K);
+    }
+}
+
+impl Hasher for FastHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            self.add(u64::from_le_bytes(c.try_into().unwrap_or_default()));
+        }
+        let rest = chunks.remainder();
+        if !rest.is_empty() {
+            let mut last = [0u8; 8];
+            last[..rest.len()].copy_from_slice(rest);
+            self.add(u64::from_le_bytes(last));
+        }
+    }
+    fn write_u8(&mut self, i: u8) {
+        self.add(u64::from(i));
+    }
+    fn write_u32(&mut self, i: u32) {
+        self.add(u64::from(i));
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.add(i as u64);
+    }
+    fn finish(&self) -> u64 {
+        // The low bits pick the bucket: fold the well-mixed high bits down.
+        self.0.rotate_left(26)
+    }
+}
 
 /// Index of a loaded file in a [`Modules`] list; 0 is the layout being checked.
 pub type ModuleId = usize;
@@ -52,9 +102,9 @@ pub struct DefId {
 /// The top-level names of every module.
 #[derive(Debug, Default)]
 pub struct Definitions {
-    pub lets: Vec<HashMap<String, DefId>>,
-    pub components: Vec<HashMap<String, DefId>>,
-    pub windows: Vec<HashMap<String, DefId>>,
+    pub lets: Vec<FastMap<String, DefId>>,
+    pub components: Vec<FastMap<String, DefId>>,
+    pub windows: Vec<FastMap<String, DefId>>,
 }
 
 impl Definitions {

@@ -11,14 +11,13 @@ use crate::codes;
 use crate::diagnostics::Diagnostics;
 
 /// A component's parameter names with whether each is required, and its events.
-type ParamsAndEvents = (Vec<(String, bool)>, Vec<String>);
-use std::collections::HashSet;
+type ParamsAndEvents<'a> = (Vec<(&'a str, bool)>, Vec<&'a str>);
 
 /// The spans of `let` names that some expression reads.
-pub type UsedLets = HashSet<crate::source::Span>;
+pub type UsedLets = super::FastSet<crate::source::Span>;
 
 pub fn resolve_names(modules: &Modules, defs: &Definitions, diags: &mut Diagnostics) -> UsedLets {
-    let mut r = Resolver { modules, defs, diags, used: HashSet::new() };
+    let mut r = Resolver { modules, defs, diags, used: UsedLets::default() };
     for m in 0..modules.len() {
         r.module(m);
     }
@@ -33,24 +32,25 @@ struct Resolver<'a, 'd> {
 }
 
 #[derive(Clone, Default)]
-struct Scope {
+struct Scope<'a> {
     module: ModuleId,
     limit: Option<usize>,
-    locals: Vec<(String, Option<crate::source::Span>)>,
+    /// Names borrowed from the syntax trees (or built in): cloning a scope copies no text.
+    locals: Vec<(&'a str, Option<crate::source::Span>)>,
     self_ok: bool,
     /// In an action: `selected` names the selected object.
     selected_ok: bool,
 }
 
-impl Scope {
-    fn with(&self, name: &str, let_span: Option<crate::source::Span>) -> Scope {
+impl<'a> Scope<'a> {
+    fn with(&self, name: &'a str, let_span: Option<crate::source::Span>) -> Scope<'a> {
         let mut s = self.clone();
-        s.locals.push((name.to_string(), let_span));
+        s.locals.push((name, let_span));
         s
     }
 }
 
-impl Resolver<'_, '_> {
+impl<'a> Resolver<'a, '_> {
     fn module(&mut self, m: ModuleId) {
         let base = Scope { module: m, ..Scope::default() };
         for (i, item) in self.modules[m].ast.items.iter().enumerate() {
@@ -58,7 +58,7 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn item(&mut self, item: &Item, scope: &Scope, index: Option<usize>) {
+    fn item(&mut self, item: &'a Item, scope: &Scope<'a>, index: Option<usize>) {
         match item {
             Item::Use(_) | Item::Design(_) => {}
             Item::Let(l) => {
@@ -111,7 +111,7 @@ impl Resolver<'_, '_> {
                 for inner in &e.items {
                     self.item(inner, &s, None);
                     if let Item::Let(l) = inner {
-                        s.locals.push((l.name.name.clone(), Some(l.name.span)));
+                        s.locals.push((&l.name.name, Some(l.name.span)));
                     }
                 }
             }
@@ -129,19 +129,16 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn widget(&mut self, w: &Widget, scope: &Scope) {
+    fn widget(&mut self, w: &'a Widget, scope: &Scope<'a>) {
         if let Some((at, _)) = &w.at {
             at.iter().for_each(|e| self.expr(e, scope));
         }
         let m = scope.module;
         // The component's parameter names, whether each is required, and its events.
-        let signature: Option<ParamsAndEvents> = if let Some(n) =
+        let signature: Option<ParamsAndEvents<'a>> = if let Some(n) =
             builtins::native(&w.component.name)
         {
-            Some((
-                n.params.iter().map(|(p, _, d)| (p.to_string(), !d)).collect(),
-                n.events.iter().map(|e| e.to_string()).collect(),
-            ))
+            Some((n.params.iter().map(|(p, _, d)| (*p, !d)).collect(), n.events.to_vec()))
         } else if let Some(id) = self.defs.find_component(self.modules, m, &w.component.name) {
             component_item(self.modules, id).map(|c| {
                 let mut params = Vec::new();
@@ -149,9 +146,9 @@ impl Resolver<'_, '_> {
                 for p in &c.params {
                     match p {
                         Param::Value { name, default, .. } => {
-                            params.push((name.name.clone(), default.is_none()))
+                            params.push((name.name.as_str(), default.is_none()))
                         }
-                        Param::Event { name } => events.push(name.name.clone()),
+                        Param::Event { name } => events.push(name.name.as_str()),
                     }
                 }
                 (params, events)
@@ -191,12 +188,12 @@ impl Resolver<'_, '_> {
             // Unknown component: its arguments may name each other (`alarm value > 35`); no
             // follow-on "unknown name" for them.
             for a in &w.args {
-                arg_scope.locals.push((a.name.name.clone(), None));
+                arg_scope.locals.push((&a.name.name, None));
             }
         }
         if let Some((params, _)) = &signature {
             for (p, _) in params {
-                arg_scope.locals.push((p.clone(), None));
+                arg_scope.locals.push((p, None));
             }
         }
         for (i, a) in w.args.iter().enumerate() {
@@ -232,7 +229,7 @@ impl Resolver<'_, '_> {
                         d.help(crate::syntax_hints::range_help(&prev.name.name, &min, &max));
                     }
                     _ => {
-                        d.suggest(&a.name.name, params.iter().map(|(p, _)| p.as_str()));
+                        d.suggest(&a.name.name, params.iter().map(|(p, _)| *p));
                     }
                 }
             }
@@ -240,7 +237,7 @@ impl Resolver<'_, '_> {
         }
         if let Some((params, events)) = &signature {
             for (p, required) in params {
-                if *required && !w.args.iter().any(|a| a.name.name == *p) {
+                if *required && !w.args.iter().any(|a| a.name.name == **p) {
                     self.diags
                         .error(
                             codes::MISSING_ARG,
@@ -251,14 +248,14 @@ impl Resolver<'_, '_> {
                 }
             }
             for h in &w.handlers {
-                if !events.contains(&h.event.name) {
+                if !events.contains(&h.event.name.as_str()) {
                     self.diags
                         .error(
                             codes::UNKNOWN_PARAM,
                             h.event.span,
                             format!("`{}` has no event `{}`", w.component.name, h.event.name),
                         )
-                        .suggest(&h.event.name, events.iter().map(String::as_str));
+                        .suggest(&h.event.name, events.iter().copied());
                 }
             }
         }
@@ -267,19 +264,19 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn component(&mut self, c: &Component, m: ModuleId) {
+    fn component(&mut self, c: &'a Component, m: ModuleId) {
         let mut s = Scope { module: m, ..Scope::default() }.with("w", None).with("h", None);
         for p in &c.params {
             if let Param::Value { default: Some(d), .. } = p {
                 self.expr(d, &Scope { module: m, ..Scope::default() });
             }
-            s.locals.push((p.name().name.clone(), None));
+            s.locals.push((&p.name().name, None));
         }
         for stmt in &c.body {
             match stmt {
                 Stmt::Let(l) => {
                     self.expr(&l.value, &s);
-                    s.locals.push((l.name.name.clone(), Some(l.name.span)));
+                    s.locals.push((&l.name.name, Some(l.name.span)));
                 }
                 Stmt::Primitive(p) => {
                     p.args.iter().for_each(|e| self.expr(e, &s));
@@ -289,7 +286,7 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn bind(&mut self, b: &Bind, scope: &Scope) {
+    fn bind(&mut self, b: &'a Bind, scope: &Scope<'a>) {
         let Some((_, kinds)) = builtins::DEVICES.iter().find(|(d, _)| *d == b.device.name) else {
             self.diags
                 .error(
@@ -429,7 +426,7 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn actions(&mut self, actions: &[Action], scope: &Scope) {
+    fn actions(&mut self, actions: &'a [Action], scope: &Scope<'a>) {
         let with_selected = Scope { selected_ok: true, ..scope.clone() };
         let scope = &with_selected;
         for a in actions {
@@ -473,8 +470,8 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn name(&mut self, name: &str, span: crate::source::Span, scope: &Scope) {
-        if let Some((_, let_span)) = scope.locals.iter().rev().find(|(n, _)| n == name) {
+    fn name(&mut self, name: &str, span: crate::source::Span, scope: &Scope<'a>) {
+        if let Some((_, let_span)) = scope.locals.iter().rev().find(|(n, _)| *n == name) {
             if let Some(s) = let_span {
                 self.used.insert(*s);
             }
@@ -510,7 +507,7 @@ impl Resolver<'_, '_> {
             return;
         }
         let mut candidates = self.defs.visible_names(self.modules, scope.module);
-        candidates.extend(scope.locals.iter().map(|(n, _)| n.clone()));
+        candidates.extend(scope.locals.iter().map(|(n, _)| n.to_string()));
         d.suggest(name, candidates.iter().map(String::as_str));
         if d.help.is_none() {
             d.help("world-model paths start at `root`, e.g. `root.vehicles.usv1.nav.speed`");
@@ -523,7 +520,7 @@ impl Resolver<'_, '_> {
         }
     }
 
-    fn expr(&mut self, e: &Expr, scope: &Scope) {
+    fn expr(&mut self, e: &'a Expr, scope: &Scope<'a>) {
         match &e.kind {
             ExprKind::Name(n) => self.name(n, e.span, scope),
             ExprKind::SelfRef => {
@@ -535,7 +532,7 @@ impl Resolver<'_, '_> {
             }
             ExprKind::Field(base, field) => {
                 if let ExprKind::Name(ns) = &base.kind {
-                    let shadowed = scope.locals.iter().any(|(n, _)| n == ns)
+                    let shadowed = scope.locals.iter().any(|(n, _)| *n == ns)
                         || self
                             .defs
                             .find_let(self.modules, scope.module, ns, scope.limit)
@@ -634,5 +631,5 @@ fn stdlib_file_of(component: &str) -> Option<&'static str> {
 
 /// Whether a component's signature (when known) has parameter `name`.
 fn params_has(signature: &Option<ParamsAndEvents>, name: &str) -> bool {
-    signature.as_ref().is_some_and(|(params, _)| params.iter().any(|(p, _)| p == name))
+    signature.as_ref().is_some_and(|(params, _)| params.iter().any(|(p, _)| *p == name))
 }

@@ -104,8 +104,7 @@ fn digest(name: &str, value: &Expr) -> u64 {
     name.hash(&mut h);
     let mut stack = vec![value];
     while let Some(e) = stack.pop() {
-        // The type is flat: its JSON is short, whatever the expression.
-        serde_json::to_string(&e.ty).unwrap_or_default().hash(&mut h);
+        e.ty.hash(&mut h);
         e.span.hash(&mut h);
         std::mem::discriminant(&e.node).hash(&mut h);
         let mut operands: Vec<&Expr> = Vec::new();
@@ -123,11 +122,11 @@ fn digest(name: &str, value: &Expr) -> u64 {
             }
             Node::Range { lo, hi } => operands.extend([&**lo, &**hi]),
             Node::Unary { op, arg } => {
-                format!("{op:?}").hash(&mut h);
+                std::mem::discriminant(op).hash(&mut h);
                 operands.push(arg);
             }
             Node::Binary { op, lhs, rhs } => {
-                format!("{op:?}").hash(&mut h);
+                std::mem::discriminant(op).hash(&mut h);
                 operands.extend([&**lhs, &**rhs]);
             }
             Node::If { cond, then, other } => operands.extend([&**cond, &**then, &**other]),
