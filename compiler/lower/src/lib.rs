@@ -13,6 +13,9 @@
 #![forbid(unsafe_code)]
 
 pub mod convert;
+mod data;
+
+pub use data::data_params;
 
 use mocu_jit as jit;
 use mocu_language::program::{

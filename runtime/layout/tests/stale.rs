@@ -171,3 +171,44 @@ fn a_schema_stale_after_wins_over_the_publishers_rate() {
     layout.settle();
     assert_eq!(aged(&ds), Some(Value::Bool(true)), "2.1 s: aged");
 }
+
+/// Only what feeds a widget's data parameters (`mocu_lower::data_params`: no default; a
+/// control's label and an alert's message are not data) makes it stale: a label showing a
+/// vehicle's speed is, a button enabled by that vehicle's state is not, nor an alert
+/// banner whose message and `active` read it, nor a gauge placed by it.
+#[test]
+fn only_the_data_a_widget_shows_makes_it_stale_never_its_settings_labels_or_actions() {
+    let text = r#"
+use "stdlib/gauges.mocu"
+use "stdlib/controls.mocu"
+use "stdlib/alerts.mocu"
+window hud { layer 10 rect 0 0 100% 100% }
+in hud {
+  label: Label { at 10 10  text "SPD {root.vehicles.usv1.nav.speed:.1} kn" }
+  button: Button { at 10 40 120 30  label "STOP {root.vehicles.usv1.nav.speed:.0}"  enabled root.vehicles.usv1.fuel > 0.1  on press call root.vehicles.usv1.stop() }
+  banner: AlertBanner { at 0 80 400 30  message "FUEL {root.vehicles.usv1.fuel * 100:.0}%"  active root.vehicles.usv1.fuel < 0.9 }
+  placed: TextGauge { at 10 (120 + root.vehicles.usv1.fuel) 200 26  label "K"  value 3 }
+  toggle: Toggle { at 10 160 40 20  label "ENGINE {root.vehicles.usv1.nav.speed:.0}"  state root.vehicles.usv1.fuel > 0.1 }
+}
+"#;
+    let clock = Arc::new(ManualClock::new());
+    let ds = DataServer::with_clock(Config { workers: 2 }, clock.clone());
+    let (v1, nav1) = usv(&ds, "usv1");
+    ds.set(v1, "stale_after", Value::Float(1.0)).unwrap();
+    let layout = Layout::load(&ds, &program(text), config(), Arc::new(NullSink)).unwrap();
+    layout.settle();
+    ds.set(v1, "link_lost", Value::Bool(true)).unwrap();
+    clock.advance(Duration::from_secs(2));
+    ds.set(nav1, "speed", Value::Float(0.0)).unwrap(); // fresh speed: only fuel ages
+    layout.settle();
+    fn at(w: &str) -> [&str; 3] {
+        ["display", "hud", w]
+    }
+    assert_eq!(stale(&ds, &at("label")), Some(Value::Bool(true)), "a label of vehicle data");
+    assert_eq!(stale(&ds, &at("toggle")), Some(Value::Bool(true)), "a toggle's state");
+    for w in ["button", "banner", "placed"] {
+        assert_eq!(stale(&ds, &at(w)), None, "{w}: reads the vehicle only in its settings");
+        let g = ds.resolve(&at(w)).unwrap();
+        assert_eq!(ds.try_get(g, "aged".into()), None, "{w}: its settings never age it");
+    }
+}

@@ -3,7 +3,6 @@
 
 use mocu_jit::{self as jit, Evaluate, Slot};
 use mocu_language::program::{Component, Program};
-use mocu_language::types::TypeKind;
 use mocu_lower::convert::{to_slot, to_value};
 use mocu_lower::{LowerError, Lowerer, Scope, Source, value_ty};
 use mocu_value::Value;
@@ -29,9 +28,9 @@ pub struct Compiled {
     pub slots: Vec<(String, jit::Ty)>,
     pub shapes: Vec<ShapeOut>,
     pub events: Vec<String>,
-    /// The data parameters (`value: number?`, `heading: number?`, `state: bool?`): optional
-    /// numbers and booleans with no default. A widget whose data parameters have not
-    /// changed for a while is stale.
+    /// The data parameters (`value: number?`, `text: string`, a toggle's `state: bool?`;
+    /// `mocu_lower::data_params`): a widget that was given one of them is veiled when its
+    /// `stale` or `aged` property says the data feeding them is old.
     pub data: Vec<String>,
 }
 
@@ -131,16 +130,7 @@ fn compile_component(c: &Component, index: usize) -> Result<(jit::Function, Comp
             slots,
             shapes,
             events: c.events.clone(),
-            data: c
-                .params
-                .iter()
-                .filter(|p| {
-                    p.ty.absent
-                        && p.default.is_none()
-                        && matches!(p.ty.kind, TypeKind::Number { .. } | TypeKind::Bool)
-                })
-                .map(|p| p.name.clone())
-                .collect(),
+            data: mocu_lower::data_params(c).map(|p| p.name.clone()).collect(),
         },
     ))
 }

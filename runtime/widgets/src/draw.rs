@@ -143,22 +143,47 @@ pub fn extent(shapes: &[ShapeOut], outs: &[Option<Value>]) -> Option<Rect> {
                 }
             }
             ("text", _) => {
-                let (Some(x), Some(y)) = (num(&args[0]), num(&args[1])) else { continue };
-                let Some(text) = args.get(2).and_then(|v| v.as_ref()).map(|v| v.to_string()) else {
-                    continue;
-                };
-                let size = style("size").and_then(Value::as_f64).map_or(14.0, |s| s as f32);
-                let bold = style("font").and_then(Value::as_str) == Some("bold");
-                let w = mocu_display::measure_text(&text, size, bold).width;
-                let x0 = match style("align").and_then(Value::as_str) {
-                    Some("center") | Some("centre") => x - w / 2.0,
-                    Some("right") => x - w,
-                    _ => x,
-                };
-                add(x0, y - size * 0.65, x0 + w, y + size * 0.65);
+                if let Some(r) = text_rect(s, outs) {
+                    add(r.x, r.y, r.x + r.w, r.y + r.h);
+                }
             }
             _ => {}
         }
     }
     acc.map(|(x0, y0, x1, y1)| Rect::new(x0, y0, x1 - x0, y1 - y0))
+}
+
+/// Where the visible text of one evaluated component lies (component-local): what the
+/// STALE tag must not cover.
+pub fn text_rects(shapes: &[ShapeOut], outs: &[Option<Value>]) -> Vec<Rect> {
+    let shown = |s: &&ShapeOut| {
+        s.kind == "text"
+            && outs[s.first..s.first + s.args]
+                .get(2)
+                .and_then(|v| v.as_ref())
+                .is_some_and(|t| !t.to_string().trim().is_empty())
+    };
+    shapes.iter().filter(shown).filter_map(|s| text_rect(s, outs)).collect()
+}
+
+/// The box of a `text` shape's line (`None` when it is hidden or not placed).
+fn text_rect(s: &ShapeOut, outs: &[Option<Value>]) -> Option<Rect> {
+    let style = |name: &str| -> Option<&Value> {
+        s.styles.iter().find(|(n, _)| n == name).and_then(|(_, i)| outs[*i].as_ref())
+    };
+    if style("visible").and_then(Value::as_bool) == Some(false) {
+        return None;
+    }
+    let args = &outs[s.first..s.first + s.args];
+    let (x, y) = (num(args.first()?)?, num(args.get(1)?)?);
+    let text = args.get(2)?.as_ref()?.to_string();
+    let size = style("size").and_then(Value::as_f64).map_or(14.0, |s| s as f32);
+    let bold = style("font").and_then(Value::as_str) == Some("bold");
+    let w = mocu_display::measure_text(&text, size, bold).width;
+    let x0 = match style("align").and_then(Value::as_str) {
+        Some("center") | Some("centre") => x - w / 2.0,
+        Some("right") => x - w,
+        _ => x,
+    };
+    Some(Rect::new(x0, y - size * 0.65, w, size * 1.3))
 }

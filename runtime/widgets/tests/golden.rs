@@ -135,6 +135,35 @@ fn every_widget_stale() {
     check_golden("widgets_stale", &f);
 }
 
+/// Staleness follows what a widget shows: with usv1's link lost, the label and the read-out
+/// of its data are veiled and tagged; the button its state enables and the alert banner
+/// about its fuel look exactly as they did (actions and alerts are never veiled).
+#[test]
+fn a_stale_label_is_veiled_and_a_button_or_alert_banner_is_not() {
+    use mocu_dataserver::ObjectInfo;
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/stale_label.mocu");
+    let mut rig = Rig::new(&file, (480, 200), steady());
+    let ds = rig.ds.clone();
+    let vs = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
+    let v = ds.create_object(vs, ObjectInfo::new("usv1", "usv")).unwrap();
+    let nav = ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+    ds.set(v, "armed", Value::Bool(true)).unwrap();
+    ds.set(v, "fuel", Value::Float(0.31)).unwrap();
+    ds.set(nav, "heading", Value::Float(47.0)).unwrap();
+    ds.set(nav, "speed", Value::Float(6.2)).unwrap();
+    let fresh = rig.frame();
+    ds.set(v, "link_lost", Value::Bool(true)).unwrap();
+    ds.set(v, "stale", Value::Bool(true)).unwrap();
+    let stale = rig.frame();
+    check_golden("stale_label", &stale);
+    let label = |f: &tiny_skia::Pixmap| crop(f, 10, 8, 200, 40);
+    assert!(label(&fresh).data() != label(&stale).data(), "the label is veiled");
+    let button = |f: &tiny_skia::Pixmap| crop(f, 0, 60, 480, 64);
+    assert!(button(&fresh).data() == button(&stale).data(), "the button is not veiled");
+    let banner = |f: &tiny_skia::Pixmap| crop(f, 0, 130, 480, 60);
+    assert!(banner(&fresh).data() == banner(&stale).data(), "the banner is not veiled");
+}
+
 /// A part of a frame.
 fn crop(f: &tiny_skia::Pixmap, x: u32, y: u32, w: u32, h: u32) -> tiny_skia::Pixmap {
     let mut out = tiny_skia::Pixmap::new(w, h).unwrap();
@@ -186,6 +215,11 @@ fn feedback_hover_press_and_disabled() {
 /// stepped explicitly for `seconds` of simulated time.
 fn paper(layout: &str, size: (u32, u32), seconds: f64) -> (Rig, Sim) {
     let rig = Rig::new(&root().join("layouts").join(layout), size, steady());
+    // The shipped profile's chart (layouts/project.toml `[modules.map]`): the harbour.
+    let harbour = root().join("layouts/maps/harbour.geojson");
+    let chart = mocu_mapdata::MapDataConfig { overlays: vec![harbour], ..Default::default() };
+    let map_ctx = ModuleContext::detached("map", rig.ds.clone());
+    mocu_host::Module::start(&mut mocu_mapdata::MapDataModule::new(chart), &map_ctx).unwrap();
     let ctx = ModuleContext::detached("sim", rig.ds.clone());
     let cfg = SimConfig { seed: 7, appear_every: 0.0, autostart: true, ..SimConfig::default() };
     let sim = Sim::new(ctx, cfg).unwrap();

@@ -20,8 +20,6 @@ pub(crate) struct FuncInfo {
     pub(crate) lets: Vec<(super::lets::LetKey, usize)>,
     /// The shared `let` whose value it computes, if it is one's function.
     pub(crate) produces: Option<super::lets::LetKey>,
-    /// The vehicle paths it reads through shared `let`s as well as itself (`stale.rs`).
-    pub(crate) through: Vec<(Source, jit::Ty)>,
 }
 
 #[derive(Clone)]
@@ -48,6 +46,9 @@ pub(crate) struct CompiledWidget {
     /// Object-typed arguments: published as dotted-path text.
     pub(crate) objects: Vec<(String, Base, Vec<String>)>,
     pub(crate) handlers: Vec<(String, Vec<CompiledAction>)>,
+    /// What feeds its data parameters (their slots and the vehicle paths they read through
+    /// shared `let`s): its staleness and age come from these only.
+    pub(crate) data_through: Vec<(Source, jit::Ty)>,
 }
 
 fn lower_err(e: impl std::fmt::Display) -> LoadError {
@@ -84,11 +85,6 @@ impl FnRef {
     pub(crate) fn slots(&self) -> &[(Source, jit::Ty)] {
         &self.code.infos.get().expect("finished")[self.index].slots
     }
-
-    /// Its slots and the vehicle paths it reads through shared `let`s (`stale.rs`).
-    pub(crate) fn through(&self) -> &[(Source, jit::Ty)] {
-        &self.code.infos.get().expect("finished")[self.index].through
-    }
 }
 
 /// Collects functions while compiling a layout.
@@ -104,6 +100,9 @@ pub(crate) struct Builder {
     failed: Option<LoadError>,
     /// IR nodes of every function added ([`jit::Expr::size`]).
     pub(crate) ir_nodes: usize,
+    /// Each component's data parameters (`mocu_lower::data_params`): only what feeds them
+    /// makes a widget stale.
+    pub(crate) data_params: Arc<std::collections::HashMap<String, Vec<String>>>,
 }
 
 impl Builder {
@@ -120,29 +119,36 @@ impl Builder {
             let_fns: std::collections::HashMap::new(),
             failed: None,
             ir_nodes: 0,
+            data_params: Arc::default(),
         }
     }
 
     /// A builder that shares the `let`s of `program` that several functions read
     /// (`lets.rs`): the functions lowered with [`Builder::lowerer`] read them through nodes.
     pub(crate) fn sharing(program: &Program) -> Builder {
-        Builder { shared: super::lets::shared_lets(program), ..Builder::new() }
+        let data_params = program
+            .components
+            .iter()
+            .map(|c| {
+                (c.name.clone(), crate::lower::data_params(c).map(|p| p.name.clone()).collect())
+            })
+            .collect();
+        Builder {
+            shared: super::lets::shared_lets(program),
+            data_params: Arc::new(data_params),
+            ..Builder::new()
+        }
     }
 
     /// Adds a function, and the functions of the shared `let`s it reads (an error there is
     /// reported by [`Builder::finish`]). `screen`: as `lw` was made with.
     pub(crate) fn add(&mut self, lw: Lowerer, outputs: Vec<jit::Expr>) -> FnRef {
-        let through = match lw.shared_reads.is_empty() {
-            true => lw.slots.clone(),
-            false => match self.share(&lw, lw.screen()) {
-                Ok(t) => t,
-                Err(e) => {
-                    self.failed.get_or_insert(e);
-                    Vec::new()
-                }
-            },
-        };
-        let index = self.push_fn(lw, outputs, None, through);
+        if !lw.shared_reads.is_empty()
+            && let Err(e) = self.share(&lw, lw.screen())
+        {
+            self.failed.get_or_insert(e);
+        }
+        let index = self.push_fn(lw, outputs, None);
         FnRef { code: self.code.clone(), index }
     }
 
@@ -151,7 +157,6 @@ impl Builder {
         lw: Lowerer,
         outputs: Vec<jit::Expr>,
         produces: Option<super::lets::LetKey>,
-        through: Vec<(Source, jit::Ty)>,
     ) -> usize {
         let lets = lw
             .shared_reads
@@ -164,7 +169,7 @@ impl Builder {
         let (f, slots) = lw.finish(outputs);
         self.ir_nodes += f.locals.iter().chain(&f.outputs).map(jit::Expr::size).sum::<usize>();
         self.functions.push(f);
-        self.infos.push(FuncInfo { slots, lets, produces, through });
+        self.infos.push(FuncInfo { slots, lets, produces });
         self.functions.len() - 1
     }
 
@@ -333,8 +338,15 @@ pub(crate) fn compile_widget(
                     names.push(format!("{}.{end}", a.name));
                 }
             }
-            TypeKind::Object { .. } => {
-                if let mocu_language::program::Node::Path(p) = &e.node {
+            // An object, or a path typed only at run time given to a native widget's
+            // object parameter (`Map { follow usv }` without a schema); through `let`s too.
+            TypeKind::Object { .. } | TypeKind::Dynamic
+                if matches!(e.ty.kind, TypeKind::Object { .. })
+                    || mocu_language::builtins::native(&w.component).is_some_and(|n| {
+                        n.params.iter().any(|(p, t, _)| *p == a.name && *t == "object")
+                    }) =>
+            {
+                if let mocu_language::program::Node::Path(p) = &e.peel().node {
                     let (base, objs) = lw.path_names(p).map_err(lower_err)?;
                     objects.push((a.name.clone(), base, objs));
                 }
@@ -348,6 +360,21 @@ pub(crate) fn compile_widget(
         }
     }
     let through = b.share(&lw, screen)?;
+    // Only the vehicles feeding the data parameters make the widget stale (a button that
+    // is enabled while a vehicle is armed, an alert that is active while its fuel is low, a
+    // dial placed by a vehicle's property are not veiled by that vehicle's age).
+    let through = match b.data_params.clone().get(&w.component) {
+        Some(data) => {
+            let mut dl = b.lowerer(Scope::Widget { args: &w.args, at: &w.at }, screen);
+            for a in w.args.iter().filter(|a| data.contains(&a.name)) {
+                let ty = value_ty(&a.value.expr.ty).unwrap_or(jit::Ty::Num);
+                dl.lower(&a.value.expr, ty).map_err(lower_err)?;
+            }
+            b.share(&dl, screen)?
+        }
+        None => through, // a native widget: all it reads
+    };
+    let data_through = through.clone();
     if let Some(stale) = crate::stale::widget_stale(&mut lw, &through) {
         outs.push(stale);
         names.push("stale".into());
@@ -369,6 +396,7 @@ pub(crate) fn compile_widget(
         outputs: names,
         objects,
         handlers,
+        data_through,
     })
 }
 

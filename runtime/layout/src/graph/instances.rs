@@ -172,7 +172,7 @@ impl Shared {
             let cell = self.add_cell(st, &w.f, targets, instance);
             made.push((g, cell));
             let object = instance.and_then(|i| st.instances[i].as_ref()).map(|i| i.object);
-            crate::stale::register(self, g, w.f.through(), object);
+            crate::stale::register(self, g, &w.data_through, object);
             actions::publish_handlers(self, g, &w.handlers, object);
             if let Some(i) = instance
                 && let Some(inst) = st.instances[i].as_mut()

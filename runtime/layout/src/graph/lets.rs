@@ -151,7 +151,7 @@ impl Builder {
                 }
                 Some((inner, e)) => {
                     let mut through = self.through(&inner);
-                    let index = self.push_fn(inner, vec![e], Some(key), through.clone());
+                    let index = self.push_fn(inner, vec![e], Some(key));
                     through.retain(|(s, _)| about_a_vehicle(s));
                     self.let_fns.insert(key, LetFn { index, through: Arc::new(through) });
                 }

@@ -18,7 +18,7 @@ impl Shared {
             self.ds.try_get(*w, PropName::new("order")).and_then(|v| v.as_i64()).unwrap_or(0)
         });
         let damage = c.damage();
-        for w in widgets {
+        for &w in &widgets {
             let props: HashMap<String, Value> = match self.ds.properties(w) {
                 Ok(p) => p.into_iter().map(|(n, v)| (n.as_str().to_string(), v)).collect(),
                 Err(_) => continue,
@@ -42,6 +42,7 @@ impl Shared {
             c.translate(x, y);
             let lib = self.lib.lock().clone();
             let mut drawn = bounds.map(|b| Rect::new(0.0, 0.0, b.w, b.h));
+            let mut texts = Vec::new();
             if let Some(comp) = lib.components.get(component) {
                 // A layout with `design` draws its components at the design's scale: they
                 // see their size in design px (docs/language.md, "Screen sizes").
@@ -58,8 +59,13 @@ impl Shared {
                 c.scale(s, s);
                 draw_shapes(c, &comp.shapes, &outs);
                 c.restore();
-                if let (Some(d), Some(e)) = (drawn, crate::draw::extent(&comp.shapes, &outs)) {
-                    drawn = Some(union(d, Rect::new(e.x * s, e.y * s, e.w * s, e.h * s)));
+                texts = crate::draw::text_rects(&comp.shapes, &outs)
+                    .into_iter()
+                    .map(|t| Rect::new(t.x * s, t.y * s, t.w * s, t.h * s))
+                    .collect();
+                if let Some(e) = crate::draw::extent(&comp.shapes, &outs) {
+                    let e = Rect::new(e.x * s, e.y * s, e.w * s, e.h * s);
+                    drawn = Some(drawn.map_or(e, |d| union(d, e)));
                 }
             } else if let (Some(s), Some(b), "VehicleList") = (num("scale"), bounds, component) {
                 // The vehicle list grows with a design's scale too (its rows: `pointer.rs`).
@@ -72,7 +78,16 @@ impl Shared {
                 draw_native(c, &self.ds, component, &props, bounds);
             }
             let data = self.data_props(component);
-            self.overlays(c, w, &props, &data, bounds, drawn);
+            // The other widgets' boxes, for a STALE tag that finds no room inside its own.
+            let others = || -> Vec<Rect> {
+                let shown = |o: &Guid| {
+                    self.ds.try_get(*o, PropName::new("visible")).and_then(|v| v.as_bool())
+                        != Some(false)
+                };
+                let boxes = widgets.iter().filter(|o| **o != w && shown(o));
+                boxes.filter_map(|o| super::widget_bounds(&self.ds, *o)).collect()
+            };
+            self.overlays(c, w, &props, &data, bounds, (drawn, &texts, &others));
             c.restore();
         }
     }
@@ -85,9 +100,32 @@ impl Shared {
         props: &HashMap<String, Value>,
         data: &[String],
         bounds: Option<Rect>,
-        drawn: Option<Rect>,
+        (drawn, texts, others): (Option<Rect>, &[Rect], &dyn Fn() -> Vec<Rect>),
     ) {
-        let Some(b) = bounds else { return };
+        // A component with a `stale` parameter draws its own veil and state field (the
+        // status header, stdlib/status.mocu): a tag here would sit on its text.
+        let own_stale = props.get("component").and_then(Value::as_str).is_some_and(|c| {
+            self.lib
+                .lock()
+                .components
+                .get(c)
+                .is_some_and(|c| c.slots.iter().any(|(n, _)| n == "stale"))
+        });
+        let stale = !own_stale
+            && data.iter().any(|d| props.contains_key(d))
+            && (props.get("stale").and_then(Value::as_bool) == Some(true)
+                || props.get("aged").and_then(Value::as_bool) == Some(true));
+        // The tag grows with a design's scale, like the widget it marks.
+        let s = props.get("scale").and_then(Value::as_f64).map_or(1.0, |s| s.max(1.0)) as f32;
+        let room = Room { texts, others, window: c.size(), boxed: bounds.is_some() };
+        let Some(b) = bounds else {
+            // A widget placed by a point (a label): the veil covers what it drew.
+            let at = |k: &str| props.get(k).and_then(Value::as_f64).unwrap_or(0.0) as f32;
+            if let (true, Some(d)) = (stale, drawn) {
+                stale_veil(c, Rect::new(at("x"), at("y"), 0.0, 0.0), d, 4.0, s, &room);
+            }
+            return;
+        };
         // Round widgets (dials, compasses, horizons) get round overlays.
         let radius = if (b.w - b.h).abs() < 1.0 && b.w >= 48.0 { b.w / 2.0 } else { 4.0 };
         let r = Rect::new(-2.0, -2.0, b.w + 4.0, b.h + 4.0);
@@ -111,24 +149,9 @@ impl Shared {
                 &Brush::Solid(Color::rgba(255, 255, 255, 28)),
             );
         }
-        // A component with a `stale` parameter draws its own veil and state field (the
-        // status header, stdlib/status.mocu): a tag here would sit on its text.
-        let own_stale = props.get("component").and_then(Value::as_str).is_some_and(|c| {
-            self.lib
-                .lock()
-                .components
-                .get(c)
-                .is_some_and(|c| c.slots.iter().any(|(n, _)| n == "stale"))
-        });
-        if !own_stale
-            && data.iter().any(|d| props.contains_key(d))
-            && (props.get("stale").and_then(Value::as_bool) == Some(true)
-                || props.get("aged").and_then(Value::as_bool) == Some(true))
-        {
-            // The tag grows with a design's scale, like the widget it marks.
-            let s = props.get("scale").and_then(Value::as_f64).map_or(1.0, |s| s.max(1.0));
+        if stale {
             let area = drawn.unwrap_or(Rect::new(0.0, 0.0, b.w, b.h));
-            stale_veil(c, b, area, radius, s as f32);
+            stale_veil(c, b, area, radius, s, &room);
         }
         let state = props.get("feedback").and_then(Value::as_str).unwrap_or("");
         let age = feedback_at.map_or(Duration::MAX, |t| self.ds.now().saturating_duration_since(t));
@@ -174,9 +197,10 @@ impl Shared {
 }
 
 /// The stale veil over everything a widget drew (`drawn`, widget-local; a round widget
-/// that drew nothing outside its box gets a round veil) and the STALE tag in its middle,
-/// inside the veil: it never covers a neighbour.
-fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32, s: f32) {
+/// that drew nothing outside its box gets a round veil) and the STALE tag inside the veil,
+/// where it covers none of the widget's text (`texts`: its caption, its value) if there is
+/// such a place: it never covers a neighbour, nor what it marks.
+fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32, s: f32, room: &Room) {
     let veil = Color::rgba(8, 10, 14, 170);
     let inside = drawn.x >= -0.5
         && drawn.y >= -0.5
@@ -189,26 +213,14 @@ fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32, s: f32) {
         r,
         &Brush::Solid(veil),
     );
-    // Where it hides the least: a short, wide widget's label (left), else high in the middle
-    // (the value read-outs sit low or right).
     let size = if area.h >= 16.0 * s { 12.0 * s } else { (area.h - 2.0).max(8.0) };
     let tw = mocu_display::measure_text("STALE", size, true).width;
-    let mid = if area.h < 48.0 * s && area.w >= tw + 12.0 * s {
-        Point::new(area.x + 6.0 * s + tw / 2.0, area.y + area.h / 2.0)
-    } else {
-        Point::new(area.x + area.w / 2.0, area.y + (area.h * 0.25).max(size))
-    };
-    if tw + 8.0 <= area.w {
-        c.fill_rounded_rect(
-            Rect::new(mid.x - tw / 2.0 - 4.0, mid.y - size * 0.75, tw + 8.0, size * 1.5),
-            3.0,
-            &Brush::Solid(Color::rgba(0, 0, 0, 200)),
-        );
-    }
     let style = TextStyle::new(size, Color::rgb(0xf5, 0x9e, 0x0b))
         .align(Align::Center)
         .baseline(Baseline::Middle)
         .bold();
+    let back =
+        |mid: Point| Rect::new(mid.x - tw / 2.0 - 4.0, mid.y - size * 0.75, tw + 8.0, size * 1.5);
     if tw + 8.0 > area.w && tw + 8.0 <= area.h {
         // A tall, narrow widget (a vertical bar): the tag runs up its middle, inside it.
         let mid = Point::new(area.x + area.w / 2.0, area.y + area.h / 2.0);
@@ -221,5 +233,118 @@ fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32, s: f32) {
         c.restore();
         return;
     }
+    let mid = tag_place(b, area, back(Point::new(0.0, 0.0)), room, s);
+    if tw + 8.0 <= area.w {
+        c.fill_rounded_rect(back(mid), 3.0, &Brush::Solid(Color::rgba(0, 0, 0, 200)));
+    }
     c.draw_text("STALE", mid, &style);
+}
+
+/// What a STALE tag must leave uncovered: the widget's own text (widget-local), the other
+/// widgets' boxes (window px, asked for only when the tag goes outside) and the window.
+struct Room<'a> {
+    texts: &'a [Rect],
+    others: &'a dyn Fn() -> Vec<Rect>,
+    window: mocu_display::Size,
+    /// The widget has a box, and a damage repaint redraws only around it (`inflate`); a
+    /// widget placed by a point repaints its whole window.
+    boxed: bool,
+}
+
+/// How much of `texts` the box `t` covers (px²).
+fn covered(t: Rect, texts: &[Rect]) -> f32 {
+    let over = |r: &Rect| {
+        let w = (t.x + t.w).min(r.x + r.w) - t.x.max(r.x);
+        let h = (t.y + t.h).min(r.y + r.h) - t.y.max(r.y);
+        w.max(0.0) * h.max(0.0)
+    };
+    texts.iter().map(over).sum()
+}
+
+/// The middle of the STALE tag (its box `tag` centred on the origin) of the widget with box
+/// `b` (window px) that drew `area` (widget-local): inside the area where it covers none of
+/// the widget's text, nearest to where it hides the least in a gauge — the middle of a short,
+/// wide widget, high in the middle of a tall one; where the area has no such place (a
+/// short read-out whose caption and value fill it), just above or below it, on no other
+/// widget, within the damage margin; else inside, where it covers the least.
+fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
+    let want = if area.h < 48.0 * s {
+        Point::new(area.x + area.w * 0.5, area.y + area.h / 2.0)
+    } else {
+        Point::new(area.x + area.w / 2.0, area.y + (area.h * 0.25).max(-tag.y))
+    };
+    // The box stays in the area where it fits (a short widget: its height's middle).
+    let span = |lo: f32, len: f32, half: f32| {
+        if len >= 2.0 * half {
+            (lo + half, lo + len - half)
+        } else {
+            (lo + len / 2.0, lo + len / 2.0)
+        }
+    };
+    let at = |m: Point| Rect::new(m.x + tag.x, m.y + tag.y, tag.w, tag.h);
+    let (x0, x1) = span(area.x, area.w, tag.w / 2.0);
+    let best_in = |y0: f32, y1: f32| {
+        let step = (2.0 * s).max(1.0);
+        let mut best = (f32::MAX, f32::MAX, Point::new(want.x.clamp(x0, x1), y0));
+        let mut y = y0;
+        while y <= y1 + 0.01 {
+            let mut x = x0;
+            while x <= x1 + 0.01 {
+                let m = Point::new(x, y);
+                let d = (x - want.x).powi(2) + (y - want.y).powi(2);
+                let k = covered(at(m), room.texts);
+                if (k, d) < (best.0, best.1) {
+                    best = (k, d, m);
+                }
+                x += step;
+            }
+            y += step;
+        }
+        best
+    };
+    let (y0, y1) = span(area.y, area.h, tag.h / 2.0);
+    let inside = best_in(y0, y1);
+    let mut pick = inside.2;
+    if inside.0 > 0.0 {
+        // Just above the area (over its top edge by 2 px) or just below it, inside the
+        // margin a damage repaint redraws (`inflate`).
+        let above = area.y - tag.h / 2.0 + 2.0;
+        let below = area.y + area.h + tag.h / 2.0 - 2.0;
+        let window = Rect::new(-b.x, -b.y, room.window.w, room.window.h);
+        let others: Vec<Rect> = (room.others)()
+            .into_iter()
+            .map(|o| Rect::new(o.x - b.x, o.y - b.y, o.w, o.h))
+            .collect();
+        // A widget placed by a point (a label): right after what it drew, first.
+        let right = Point::new(area.x + area.w + tag.w / 2.0 + 4.0 * s, area.y + area.h / 2.0);
+        let mut sides = Vec::with_capacity(3);
+        if !room.boxed {
+            sides.push((right, false));
+        }
+        sides.extend([(Point::new(0.0, above), true), (Point::new(0.0, below), true)]);
+        for (side, slide) in sides {
+            // Above or below, it slides along the area to the place nearest the middle.
+            let (x, y, k) = if slide {
+                let best = best_in(side.y, side.y);
+                (best.2.x, side.y, best.0)
+            } else {
+                (side.x, side.y, covered(at(side), room.texts))
+            };
+            let t = at(Point::new(x, y));
+            let fits = k == 0.0
+                && (!room.boxed
+                    || (t.y >= -super::MARGIN && t.y + t.h <= b.h + super::MARGIN + super::BELOW))
+                && t.x >= window.x
+                && t.y >= window.y
+                && t.x + t.w <= window.x + window.w
+                && t.y + t.h <= window.y + window.h
+                && !others.iter().any(|o| o.intersects(&t));
+            if fits {
+                pick = Point::new(x, y);
+                break;
+            }
+        }
+    }
+    // Whole pixels: a damage repaint draws the tag exactly as a full one does.
+    Point::new(pick.x.round(), pick.y.round())
 }
