@@ -70,7 +70,12 @@ use SettingType::*;
 
 /// Keys every `[modules.NAME]` table may have, whatever its kind.
 pub const COMMON: &[Setting] = &[
-    s("kind", String, "the table's NAME", "Which module runs: sim, mavlink, video, codec or input"),
+    s(
+        "kind",
+        String,
+        "the table's NAME",
+        "Which module runs: sim, mavlink, video, codec, input or map",
+    ),
     s(
         "order",
         Int,
@@ -103,8 +108,8 @@ pub const MODULES: &[ModuleKind] = &[
             s("appear_every", Number, "0.5", "Seconds between two vehicles appearing"),
             s("rate_hz", Number, "20", "Simulation steps per second, in (0, 1000]"),
             s("camera_fps", Number, "10", "Simulated camera frames per second"),
-            s("camera_width", Int, "64", "Simulated camera width in px, 1 to 1024"),
-            s("camera_height", Int, "48", "Simulated camera height in px, 1 to 1024"),
+            s("camera_width", Int, "640", "Simulated camera width in px, 1 to 1920"),
+            s("camera_height", Int, "480", "Simulated camera height in px, 1 to 1080"),
             s("origin_lat", Number, "32.71", "Latitude of the local origin, in degrees"),
             s("origin_lon", Number, "-117.24", "Longitude of the local origin, in degrees"),
             s(
@@ -184,6 +189,65 @@ pub const MODULES: &[ModuleKind] = &[
             s("toasts", Int, "5", "How many input toasts are kept, 0 to 20"),
             s("gilrs", Bool, "true", "Read gamepads"),
             s("auto_select", Bool, "true", "Select the first vehicle when it appears"),
+        ],
+    },
+    ModuleKind {
+        kind: "distrib",
+        description: "The world model shared over Zenoh with other OCUs and adapters (docs/distribution.md)",
+        settings: &[
+            s(
+                "listen",
+                Names,
+                "none",
+                "Zenoh endpoints to listen on, e.g. [\"tcp/127.0.0.1:7447\"]",
+            ),
+            s("connect", Names, "none", "Zenoh endpoints to connect to"),
+            s(
+                "share",
+                Names,
+                "none",
+                "Object paths whose subtrees are published, e.g. [\"vehicles\"]",
+            ),
+            s("operator", String, "none", "The operator's name, sent with every call"),
+            s(
+                "site",
+                String,
+                "the operator",
+                "This process's name on the key space (mocu/<site>/...)",
+            ),
+            s(
+                "call_timeout_ms",
+                Int,
+                "10000",
+                "How long a call to another site waits for its answer, in ms",
+            ),
+            s("lease_ms", Int, "2000", "Silence after which a peer is taken as gone, in ms"),
+            s(
+                "join_timeout_ms",
+                Int,
+                "10000",
+                "How long a joiner waits for the first snapshot, in ms",
+            ),
+        ],
+    },
+    ModuleKind {
+        kind: "map",
+        description: "The map's data: GeoJSON overlays under root.map.features, raster tiles (docs/map.md)",
+        settings: &[
+            s(
+                "overlays",
+                Names,
+                "none",
+                "GeoJSON files (coastline, piers, buoys, zones, no-go areas), relative to the profile",
+            ),
+            s(
+                "tiles",
+                String,
+                "none",
+                "An MBTiles file or a z/x/y folder of PNG tiles (Web Mercator), relative to the profile",
+            ),
+            s("origin_lat", Number, "32.71", "Latitude of the local frame's origin, in degrees"),
+            s("origin_lon", Number, "-117.24", "Longitude of the local frame's origin, in degrees"),
         ],
     },
 ];

@@ -366,9 +366,12 @@ impl Shared {
             (0, None) => {
                 for w in ds.children(g).unwrap_or_default() {
                     // A hidden widget has no events (fig. 1 shows one per place to swap with).
-                    let hidden = ds.try_get(w, PropName::new("visible")) == Some(Value::Bool(false));
+                    let hidden =
+                        ds.try_get(w, PropName::new("visible")) == Some(Value::Bool(false));
                     if !hidden
-                        && ds.methods(w).is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "select"))
+                        && ds
+                            .methods(w)
+                            .is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "select"))
                     {
                         ds.call(w, "select", vec![], None, |_| {});
                     }

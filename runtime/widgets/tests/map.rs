@@ -245,3 +245,26 @@ fn a_raster_background_from_an_mbtiles_file_under_the_vehicles() {
     let land = f.pixels().iter().filter(|p| (p.red(), p.green(), p.blue()) == (0xf1, 0xec, 0xdf));
     assert!(land.count() > 1000);
 }
+
+/// A vehicle that reports only its local `x`, `y` is placed from `root.map`'s origin: at
+/// the same place as one that reports the origin's latitude and longitude.
+#[test]
+fn a_vehicle_in_the_local_frame_is_anchored_at_the_configured_origin() {
+    let data = MapDataConfig { origin: (32.7105, -117.2395), ..with_harbour() };
+    let mut rig = Rig::new("tests/map.mocu", data, 1);
+    let vehicles = rig.ds.resolve(&["vehicles"]).unwrap();
+    let add = |name: &str, props: &[(&str, f64)]| {
+        let v = rig.ds.create_object(vehicles, ObjectInfo::new(name, "usv")).unwrap();
+        let nav = rig.ds.create_object(v, ObjectInfo::new("nav", "nav")).unwrap();
+        for (k, x) in props {
+            rig.ds.set(nav, *k, Value::Float(*x)).unwrap();
+        }
+    };
+    add("local", &[("x", 0.0), ("y", 0.0), ("heading", 90.0)]);
+    add("global", &[("lat", 32.7105), ("lon", -117.2395), ("heading", 0.0)]);
+    rig.frame();
+    let symbols = rig.symbols();
+    let at = |n: &str| symbols.iter().find(|s| s.0 == n).map(|s| (s.1, s.2)).unwrap();
+    let (a, b) = (at("local"), at("global"));
+    assert!((a.0 - b.0).abs() < 0.5 && (a.1 - b.1).abs() < 0.5, "{a:?} vs {b:?}");
+}

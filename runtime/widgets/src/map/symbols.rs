@@ -234,8 +234,9 @@ impl Labels {
         self.taken.push(r);
     }
 
-    /// A place for a `w`×`h` label around `anchor`, at least `gap` px from it.
-    pub fn place(&mut self, anchor: Point, gap: f32, w: f32, h: f32) -> Option<Rect> {
+    /// A place for a `w`×`h` label around `anchor`, at least `gap` px from it, and
+    /// whether it is one of the further places (then a leader line shows whose it is).
+    pub fn place(&mut self, anchor: Point, gap: f32, w: f32, h: f32) -> Option<(Rect, bool)> {
         for ring in [1.0f32, 2.2] {
             let g = gap * ring;
             let candidates = [
@@ -256,7 +257,7 @@ impl Labels {
                     && r.bottom() <= self.bounds.bottom();
                 if inside && !self.taken.iter().any(|t| t.intersects(&r)) {
                     self.taken.push(r);
-                    return Some(r);
+                    return Some((r, ring > 1.0));
                 }
             }
         }
@@ -277,7 +278,19 @@ pub fn label(
 ) -> bool {
     let w = mocu_display::measure_text(text, size, false).width + 2.0 * u;
     let h = size * 1.25;
-    let Some(r) = labels.place(anchor, gap, w, h) else { return false };
+    let Some((r, far)) = labels.place(anchor, gap, w, h) else { return false };
+    if far {
+        // From the label's nearest point towards the anchor, stopping short of the symbol.
+        let near = Point::new(anchor.x.clamp(r.x, r.right()), anchor.y.clamp(r.y, r.bottom()));
+        let (dx, dy) = (anchor.x - near.x, anchor.y - near.y);
+        let d = dx.hypot(dy);
+        if d > gap * 0.6 {
+            let k = (d - gap * 0.6) / d;
+            let end = Point::new(near.x + dx * k, near.y + dy * k);
+            c.line(near, end, 2.5 * u, HALO);
+            c.line(near, end, u, colour.with_alpha(0.8));
+        }
+    }
     let style = TextStyle::new(size, colour).align(Align::Left).baseline(Baseline::Middle);
     halo_text(c, text, Point::new(r.x + u, r.y + h / 2.0), &style, u);
     true
@@ -336,10 +349,10 @@ mod tests {
     #[test]
     fn a_label_takes_the_next_free_place_and_none_overlaps_another() {
         let mut labels = Labels::new(Rect::new(0.0, 0.0, 400.0, 300.0));
-        let a = labels.place(Point::new(100.0, 100.0), 10.0, 50.0, 15.0).unwrap();
-        let b = labels.place(Point::new(100.0, 100.0), 10.0, 50.0, 15.0).unwrap();
-        let c = labels.place(Point::new(102.0, 104.0), 10.0, 50.0, 15.0).unwrap();
-        assert_eq!(a, Rect::new(110.0, 92.5, 50.0, 15.0), "first choice: to the right");
+        let (a, far) = labels.place(Point::new(100.0, 100.0), 10.0, 50.0, 15.0).unwrap();
+        assert_eq!((a, far), (Rect::new(110.0, 92.5, 50.0, 15.0), false), "first: to the right");
+        let (b, _) = labels.place(Point::new(100.0, 100.0), 10.0, 50.0, 15.0).unwrap();
+        let (c, _) = labels.place(Point::new(102.0, 104.0), 10.0, 50.0, 15.0).unwrap();
         for (x, y) in [(a, b), (a, c), (b, c)] {
             assert!(!x.intersects(&y), "{x:?} overlaps {y:?}");
         }
@@ -348,9 +361,17 @@ mod tests {
     #[test]
     fn a_label_stays_inside_the_window_or_is_left_out() {
         let mut labels = Labels::new(Rect::new(0.0, 0.0, 100.0, 100.0));
-        let r = labels.place(Point::new(95.0, 50.0), 10.0, 40.0, 15.0).unwrap();
+        let (r, _) = labels.place(Point::new(95.0, 50.0), 10.0, 40.0, 15.0).unwrap();
         assert!(r.right() <= 100.0, "placed to the left of an anchor near the right edge");
         labels.block(Rect::new(0.0, 0.0, 100.0, 100.0));
         assert_eq!(labels.place(Point::new(50.0, 50.0), 10.0, 40.0, 15.0), None);
+    }
+
+    #[test]
+    fn with_the_near_places_taken_a_label_goes_further_out() {
+        let mut labels = Labels::new(Rect::new(0.0, 0.0, 400.0, 300.0));
+        labels.block(Rect::new(80.0, 80.0, 40.0, 40.0));
+        let (r, far) = labels.place(Point::new(100.0, 100.0), 10.0, 20.0, 10.0).unwrap();
+        assert!(far && !r.intersects(&Rect::new(80.0, 80.0, 40.0, 40.0)), "{r:?}");
     }
 }
