@@ -16,6 +16,7 @@ mod lsp;
 mod record;
 mod replay;
 mod run;
+mod serve;
 mod stop;
 
 #[derive(Parser)]
@@ -39,6 +40,8 @@ enum Command {
     Lsp(lsp::LspArgs),
     /// Replay a recorded trial (`mocu run --record`) through its layout or another.
     Replay(replay::ReplayArgs),
+    /// The headless adapter: world model and vehicle/video modules shared over Zenoh.
+    Serve(serve::ServeArgs),
 }
 
 fn main() -> ExitCode {
@@ -58,5 +61,6 @@ fn main() -> ExitCode {
         Command::Fmt(args) => fmt::main(args),
         Command::Lsp(args) => lsp::main(args),
         Command::Replay(args) => replay::main(args),
+        Command::Serve(args) => serve::main(args),
     }
 }

@@ -67,6 +67,9 @@ pub struct RunArgs {
     /// Replay this input script as a virtual gamepad (docs/input.md), for tests and trials.
     #[arg(long, value_name = "FILE")]
     pub input_script: Option<PathBuf>,
+    /// Share the world model over Zenoh (docs/distribution.md).
+    #[command(flatten)]
+    pub net: crate::serve::NetArgs,
 }
 
 pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -127,11 +130,42 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
                 (order, core, s.name.clone())
             };
             specs.sort_by_key(rank);
+            let dir = profile_dir(path);
+            for s in specs.iter_mut().filter(|s| s.kind == "map") {
+                resolve_map_files(s, &dir);
+            }
             Some(specs)
         }
         _ => None,
     };
     Ok(Target { bundle, modules })
+}
+
+/// The folder a profile's file settings (the map's `overlays` and `tiles`) are relative
+/// to: the profile's own, a layout's project's, or a bundle's.
+fn profile_dir(target: &Path) -> PathBuf {
+    if target.extension().is_some_and(|e| e == "mocu")
+        && let Some(p) =
+            mocu_language::project::discover(&target.to_string_lossy(), &mocu_language::FsLoader)
+    {
+        return Path::new(&p).parent().map(Path::to_path_buf).unwrap_or_default();
+    }
+    target.parent().map(Path::to_path_buf).unwrap_or_default()
+}
+
+/// The map module's files as paths from the working folder (docs/map.md).
+fn resolve_map_files(spec: &mut ModuleSpec, dir: &Path) {
+    let abs = |s: &mut String| *s = dir.join(&*s).to_string_lossy().into_owned();
+    if let Some(toml::Value::Array(a)) = spec.settings.get_mut("overlays") {
+        a.iter_mut()
+            .filter_map(|v| if let toml::Value::String(s) = v { Some(s) } else { None })
+            .for_each(abs);
+    }
+    if let Some(toml::Value::String(s)) = spec.settings.get_mut("tiles")
+        && !s.is_empty()
+    {
+        abs(s);
+    }
 }
 
 /// The module kinds this binary knows. A project replaces one by registering its own.
@@ -141,6 +175,8 @@ pub fn registry() -> Registry {
     mocu_mavlink::register(&mut r);
     mocu_video::register(&mut r);
     mocu_input::register(&mut r);
+    mocu_distrib::register(&mut r);
+    mocu_mapdata::register(&mut r);
     r
 }
 
@@ -175,6 +211,7 @@ pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
             s.settings.insert("script".into(), script.display().to_string().into());
         }
     }
+    crate::serve::add_distrib(&mut specs, &args.net, false);
     specs
 }
 

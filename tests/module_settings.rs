@@ -12,6 +12,8 @@ fn registry() -> Registry {
     mocu_mavlink::register(&mut r);
     mocu_video::register(&mut r);
     mocu_input::register(&mut r);
+    mocu_distrib::register(&mut r);
+    mocu_mapdata::register(&mut r);
     r
 }
 
@@ -26,7 +28,7 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
         ("codec", "source") => "root.cameras.test".into(),
         ("video", "feeds") => "auto".into(),
         ("input", "gilrs") => false.into(),
-        ("input", "script") | ("video", "camera") => "".into(),
+        ("input", "script") | ("video", "camera") | ("map", "tiles") => "".into(),
         ("video", "source") => "127.0.0.1".into(),
         ("video", "silence_ms") | ("video", "max_width" | "max_height" | "max_unit_kb") => {
             640.into()

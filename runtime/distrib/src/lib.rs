@@ -34,6 +34,9 @@ use std::time::{Duration, Instant};
 use zenoh::Wait;
 use zenoh::sample::{Locality, SampleKind};
 
+/// Told what happens to the other sites (one line each: joined, gone), for the operator.
+pub type Notify = Arc<dyn Fn(&str) + Send + Sync>;
+
 /// How a process takes part.
 #[derive(Clone, Debug)]
 pub struct Config {
@@ -121,6 +124,16 @@ impl Distrib {
         config: &Config,
         status: Option<Guid>,
     ) -> Result<Distrib, String> {
+        Distrib::start_notifying(ds, config, status, None)
+    }
+
+    /// [`Distrib::start`], telling `notify` when other sites join or go.
+    pub fn start_notifying(
+        ds: &DataServer,
+        config: &Config,
+        status: Option<Guid>,
+        notify: Option<Notify>,
+    ) -> Result<Distrib, String> {
         let session =
             zenoh::open(zenoh_config(config)?).wait().map_err(|e| format!("zenoh: {e}"))?;
         let share: Vec<Vec<String>> = config.share.iter().map(|s| object_path(s)).collect();
@@ -189,7 +202,7 @@ impl Distrib {
         // Mirroring other sites: their samples, their liveliness (history: the sites
         // already there count as appearing now).
         let (in_tx, in_rx) = unbounded();
-        let m = mirror::Mirror::new(
+        let mut m = mirror::Mirror::new(
             ds.clone(),
             session.clone(),
             site.clone(),
@@ -199,6 +212,7 @@ impl Distrib {
             joined.clone(),
             status,
         );
+        m.notify = notify;
         threads.push(spawn("mirror", Box::new(move || m.run(in_rx)))?);
         for what in ["obj", "prop"] {
             let tx = in_tx.clone();

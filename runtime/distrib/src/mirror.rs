@@ -65,6 +65,7 @@ pub(crate) struct Mirror {
     pub stats: Arc<MirrorStats>,
     pub joined: Arc<Joined>,
     pub status: Option<Guid>,
+    pub notify: Option<crate::Notify>,
     sites: HashMap<String, Site>,
 }
 
@@ -80,7 +81,18 @@ impl Mirror {
         joined: Arc<Joined>,
         status: Option<Guid>,
     ) -> Mirror {
-        Mirror { ds, session, me, tx, calls, stats, joined, status, sites: HashMap::new() }
+        Mirror {
+            ds,
+            session,
+            me,
+            tx,
+            calls,
+            stats,
+            joined,
+            status,
+            notify: None,
+            sites: HashMap::new(),
+        }
     }
 
     pub fn run(mut self, rx: Receiver<Inbound>) {
@@ -241,6 +253,12 @@ impl Mirror {
         s.objects.retain(|p, _| !p.starts_with(path));
     }
 
+    fn say(&self, text: String) {
+        if let Some(n) = &self.notify {
+            n(&text);
+        }
+    }
+
     fn peer_status(&self, site: &str, alive: bool) {
         let Some(status) = self.status else { return };
         let find = |parent: Guid, name: &str, kind: &str| -> Option<Guid> {
@@ -296,15 +314,19 @@ impl Mirror {
         s.alive = false;
         s.confirmed = None;
         let locals: Vec<Guid> = s.objects.values().map(|m| m.local).collect();
+        let mut flagged = 0;
         for g in locals {
+            let mut any = false;
             for flag in ["stale", "link_lost"] {
                 let name = PropName::new(flag);
                 if self.ds.try_get(g, name).is_some() {
-                    let _ = self.ds.set(g, name, Value::Bool(true));
+                    any |= self.ds.set(g, name, Value::Bool(true)).is_ok();
                 }
             }
+            flagged += usize::from(any);
         }
         self.peer_status(site, false);
+        self.say(format!("site `{site}` is gone: {flagged} of its objects shown stale"));
     }
 
     fn snapshot_done(&mut self, site: &str, generation: u64) {
@@ -332,6 +354,8 @@ impl Mirror {
             }
         }
         self.stats.snapshots.fetch_add(1, Ordering::Relaxed);
+        let n = self.sites.get(site).map_or(0, |s| s.objects.len());
+        self.say(format!("site `{site}` joined: {n} objects mirrored from its snapshot"));
         *self.joined.count.lock() += 1;
         self.joined.cv.notify_all();
     }

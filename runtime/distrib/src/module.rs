@@ -67,7 +67,10 @@ struct DistribModule {
 
 impl Module for DistribModule {
     fn start(&mut self, ctx: &ModuleContext) -> Result<(), String> {
-        let d = Distrib::start(&ctx.ds, &self.config, Some(ctx.status))?;
+        let c = ctx.clone();
+        let notify: crate::Notify =
+            std::sync::Arc::new(move |text: &str| c.report(Level::Info, text));
+        let d = Distrib::start_notifying(&ctx.ds, &self.config, Some(ctx.status), Some(notify))?;
         let _ = ctx.ds.set(ctx.status, "site", mocu_dataserver::Value::str(&self.config.site));
         ctx.report(
             Level::Info,

@@ -1,0 +1,269 @@
+//! The distributed world model with real processes on loopback (docs/distribution.md):
+//! `mocu serve` as the adapter, `mocu run` OCUs joining it, a Python peer written with
+//! eclipse-zenoh alone, and an adapter killed and restarted. Each test picks free ports;
+//! every wait is on something a process prints, bounded so that a hang fails.
+
+use serde_json::Value as J;
+use std::io::{BufRead, BufReader};
+use std::net::TcpListener;
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Duration;
+
+/// Long enough for a loaded 2-core CI machine; a hang becomes a failure.
+const PATIENCE: Duration = Duration::from_secs(90);
+
+fn free_port() -> u16 {
+    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
+}
+
+fn endpoint(port: u16) -> String {
+    format!("tcp/127.0.0.1:{port}")
+}
+
+type Lines = Arc<(Mutex<Vec<String>>, Condvar)>;
+
+/// A `mocu` process whose stderr is read line by line.
+struct Proc {
+    child: Child,
+    lines: Lines,
+}
+
+impl Proc {
+    fn start(args: &[&str]) -> Proc {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_mocu"))
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("mocu starts");
+        let lines: Lines = Arc::new((Mutex::new(Vec::new()), Condvar::new()));
+        let err = child.stderr.take().unwrap();
+        let l = lines.clone();
+        std::thread::spawn(move || {
+            for line in BufReader::new(err).lines().map_while(Result::ok) {
+                l.0.lock().unwrap().push(line);
+                l.1.notify_all();
+            }
+        });
+        Proc { child, lines }
+    }
+
+    /// The adapter on `port`: the simulator's four vehicles, no MAVLink or video sockets.
+    fn serve(port: u16) -> Proc {
+        let ep = endpoint(port);
+        Proc::start(&["serve", "--listen", &ep, "--mavlink", "off", "--video", "off"])
+    }
+
+    /// Waits until a line printed after the first `from` lines satisfies `pred`; returns
+    /// how many lines there are then.
+    fn wait_line(&self, from: usize, what: &str, pred: impl Fn(&str) -> bool) -> usize {
+        let (lock, signal) = &*self.lines;
+        let ok = |l: &Vec<String>| l.iter().skip(from).any(|x| pred(x));
+        let lines = lock.lock().unwrap();
+        let (lines, _) = signal.wait_timeout_while(lines, PATIENCE, |l| !ok(l)).unwrap();
+        assert!(ok(&lines), "never printed {what}; printed:\n{}", lines.join("\n"));
+        lines.len()
+    }
+
+    fn signal(&self, sig: &str) {
+        let ok = Command::new("kill").args([sig, &self.child.id().to_string()]).status();
+        assert!(ok.is_ok_and(|s| s.success()), "kill {sig}");
+    }
+
+    fn finish(mut self) -> (Output, Vec<String>) {
+        let out = self.child.stdout.take().unwrap();
+        let mut stdout = Vec::new();
+        std::io::Read::read_to_end(&mut BufReader::new(out), &mut stdout).unwrap();
+        let status = self.child.wait().unwrap();
+        let lines = self.lines.0.lock().unwrap().clone();
+        (Output { status, stdout, stderr: Vec::new() }, lines)
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+const VEHICLES: [&str; 4] = ["usv1", "usv2", "ugv1", "uav1"];
+
+/// Waits for the adapter to have all the simulator's vehicles.
+fn wait_vehicles(adapter: &Proc) {
+    adapter.wait_line(0, "the four vehicles", |l| {
+        l.contains("vehicles: ") && VEHICLES.iter().all(|v| l.contains(v))
+    });
+}
+
+/// An OCU on fig3 against the adapter, headless for `frames` frames, dumping root.vehicles.
+fn ocu_args(port: u16, operator: &str, frames: Option<&str>) -> Vec<String> {
+    let mut a: Vec<String> = [
+        "run",
+        "layouts/fig3-multi-usv.mocu",
+        "--no-sim",
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+        "--headless",
+        "--no-watch",
+        "--connect",
+        &endpoint(port),
+        "--operator",
+        operator,
+        "--dump",
+        "root.vehicles",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    if let Some(n) = frames {
+        a.extend(["--frames".to_string(), n.to_string()]);
+    }
+    a
+}
+
+fn ocu(port: u16, operator: &str) -> Proc {
+    let args = ocu_args(port, operator, Some("30"));
+    Proc::start(&args.iter().map(String::as_str).collect::<Vec<_>>())
+}
+
+/// The dump's vehicles by name.
+fn vehicles(out: &Output, lines: &[String]) -> Vec<(String, J)> {
+    assert!(out.status.success(), "the OCU failed:\n{}", lines.join("\n"));
+    let dump: J = serde_json::from_slice(&out.stdout).expect("--dump is JSON");
+    dump["children"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| (v["name"].as_str().unwrap().to_string(), v.clone()))
+        .collect()
+}
+
+fn names(vs: &[(String, J)]) -> Vec<String> {
+    let mut n: Vec<String> = vs.iter().map(|(n, _)| n.clone()).collect();
+    n.sort();
+    n
+}
+
+fn child<'a>(v: &'a J, name: &str) -> &'a J {
+    v["children"].as_array().unwrap().iter().find(|c| c["name"] == name).unwrap()
+}
+
+#[test]
+fn an_adapter_and_two_ocus_show_the_same_vehicles() {
+    let port = free_port();
+    let adapter = Proc::serve(port);
+    wait_vehicles(&adapter);
+    let (alice, bob) = (ocu(port, "alice"), ocu(port, "bob"));
+    let (a_out, a_lines) = alice.finish();
+    let (b_out, b_lines) = bob.finish();
+    let (a, b) = (vehicles(&a_out, &a_lines), vehicles(&b_out, &b_lines));
+    let mut want: Vec<String> = VEHICLES.iter().map(|s| s.to_string()).collect();
+    want.sort();
+    assert_eq!(names(&a), want, "alice's vehicles");
+    assert_eq!(names(&b), want, "bob's vehicles");
+    for (name, v) in a.iter().chain(&b) {
+        let nav = child(v, "nav");
+        assert!(nav["properties"]["speed"].is_number(), "{name}.nav.speed mirrored: {nav}");
+        assert!(v["methods"].as_array().unwrap().iter().any(|m| m == "arm"), "{name}.arm mirrored");
+    }
+    // The first of each kind patrols on its own at the adapter: armed on both screens.
+    for vs in [&a, &b] {
+        let usv1 = &vs.iter().find(|(n, _)| n == "usv1").unwrap().1;
+        assert_eq!(usv1["properties"]["armed"], J::Bool(true));
+    }
+    assert!(a_lines.iter().any(|l| l.contains("site `adapter` joined")), "{}", a_lines.join("\n"));
+}
+
+fn python_peer(port: u16, args: &[&str]) -> J {
+    let check = Command::new("python3").args(["-c", "import zenoh"]).output();
+    assert!(
+        check.is_ok_and(|o| o.status.success()),
+        "this test needs python3 with eclipse-zenoh: `python3 -m pip install eclipse-zenoh==1.10.2` \
+         (CI installs it in .ci/run)"
+    );
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/zenoh_peer.py");
+    let out = Command::new("python3")
+        .arg(script)
+        .arg(endpoint(port))
+        .args(args)
+        .output()
+        .expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "the Python peer failed:\n{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("the peer prints JSON")
+}
+
+#[test]
+fn a_python_peer_reads_a_vehicle_and_calls_its_methods_with_their_outcomes() {
+    let port = free_port();
+    let adapter = Proc::serve(port);
+    wait_vehicles(&adapter);
+    // usv1 patrols on its own: its engine runs, so starting it is refused, with the reason.
+    let r = python_peer(port, &["usv1", "start_engine"]);
+    assert_eq!(r["site"], "adapter");
+    assert!(r["properties"]["nav/speed"].is_number(), "{r}");
+    assert_eq!(r["units"]["nav/speed"], "m/s", "{r}");
+    assert_eq!(r["outcome"]["outcome"], "refused", "{r}");
+    assert_eq!(r["outcome"]["reason"], "engine already running", "{r}");
+    // A bool parameter given an int fails at the adapter; disarming is accepted.
+    let r = python_peer(port, &["usv1", "arm", "3"]);
+    assert_eq!(r["outcome"]["outcome"], "failed", "{r}");
+    let r = python_peer(port, &["usv1", "arm", "false"]);
+    assert_eq!(r["outcome"]["outcome"], "accepted", "{r}");
+    let r = python_peer(port, &["usv1", "no_such_thing"]);
+    assert_eq!(r["outcome"]["outcome"], "no_such_method", "{r}");
+}
+
+#[test]
+fn a_late_joiner_starts_from_the_state_others_left() {
+    let port = free_port();
+    let adapter = Proc::serve(port);
+    wait_vehicles(&adapter);
+    let r = python_peer(port, &["usv1", "arm", "false"]);
+    assert_eq!(r["outcome"]["outcome"], "accepted", "{r}");
+    let (out, lines) = ocu(port, "carol").finish();
+    let vs = vehicles(&out, &lines);
+    let usv1 = &vs.iter().find(|(n, _)| n == "usv1").unwrap().1;
+    assert_eq!(usv1["properties"]["armed"], J::Bool(false), "disarmed before carol joined");
+    assert_eq!(usv1["properties"]["engine"], J::Bool(false));
+}
+
+#[test]
+fn a_killed_adapter_shows_stale_on_the_ocu_and_its_return_brings_no_duplicates() {
+    let port = free_port();
+    let adapter = Proc::serve(port);
+    wait_vehicles(&adapter);
+    let args = ocu_args(port, "dave", None);
+    let ocu = Proc::start(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    let n = ocu.wait_line(0, "the adapter joining", |l| l.contains("site `adapter` joined"));
+    drop(adapter); // SIGKILL: no goodbye, the link just closes
+    // Detected by liveliness (the link closed); each vehicle's stale flag raised.
+    let stale = format!("site `adapter` is gone: {} of its objects shown stale", VEHICLES.len());
+    let n = ocu.wait_line(n, "the adapter gone", |l| l.contains(&stale));
+    let adapter = Proc::serve(port);
+    let n = ocu.wait_line(n, "the adapter back", |l| l.contains("site `adapter` joined"));
+    wait_vehicles(&adapter);
+    // The restarted adapter's vehicles, appearing one by one, reach the OCU.
+    ocu.wait_line(n, "four vehicles on the OCU", |l| {
+        l.contains("m/s") && VEHICLES.iter().all(|v| l.contains(v))
+    });
+    ocu.signal("-TERM");
+    let (out, lines) = ocu.finish();
+    let vs = vehicles(&out, &lines);
+    let mut want: Vec<String> = VEHICLES.iter().map(|s| s.to_string()).collect();
+    want.sort();
+    assert_eq!(names(&vs), want, "each vehicle once");
+    for (name, v) in &vs {
+        assert_eq!(v["properties"]["stale"], J::Bool(false), "{name} fresh again");
+    }
+    drop(adapter);
+}
