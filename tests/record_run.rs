@@ -75,9 +75,16 @@ fn a_recorded_run_has_every_channel_in_order_and_each_call_and_its_outcome_once(
         );
         assert!(c["count"].as_u64() > Some(0), "{topic} is empty");
     }
+    let values = &r["channels"]["/world/values"];
+    assert_eq!(values["schema"], "mocu_msgs/msg/PropertyValues", "{r}");
+    assert_eq!(
+        (values["schema_encoding"].as_str(), values["encoding"].as_str()),
+        (Some("ros2msg"), Some("cdr"))
+    );
+    assert!(r["values"].as_u64() > Some(0), "no batch entries: {r}");
     for (topic, c) in r["channels"].as_object().unwrap() {
         assert_eq!(c["monotonic"], true, "log_time went back on {topic}");
-        assert_eq!(c["json"], true, "{topic} has a message that is not JSON");
+        assert_eq!(c["decoded"], true, "{topic} has a message that does not decode");
     }
     // The stick's last position, as `tests/input_run.rs` works it out: 0.9 through deadzone
     // 0.1 and expo 0.3, ×100; recorded as a float, at increasing times.
@@ -157,7 +164,7 @@ fn a_killed_recording_opens_up_to_its_last_complete_chunk_with_the_video_as_rece
     assert!(count(&r, "/world/property") >= count(&on_disk, "/world/property"));
     for (topic, c) in r["channels"].as_object().unwrap() {
         assert_eq!(c["monotonic"], true, "log_time went back on {topic}");
-        assert_eq!(c["json"], true, "{topic} has a message that is not JSON");
+        assert_eq!(c["decoded"], true, "{topic} has a message that does not decode");
     }
     let (topic, video) = r["frames"].as_object().unwrap().iter().next().expect("video recorded");
     assert_eq!(topic, &format!("/video/root.cameras.udp{port}"));

@@ -8,9 +8,13 @@
    "metadata": {...},          # the `mocu` metadata record
    "attachments": [names],
    "channels": {topic: {"schema", "schema_encoding", "encoding", "count",
-                        "monotonic": log_time never decreases, "json": every message parses,
+                        "monotonic": log_time never decreases,
+                        "decoded": every message decodes (JSON; CDR on /world/values),
                         "first_ns", "last_ns"}},
-   "properties": {path: [[log_time_ns, kind, value], ...]},   # for each --property PATH
+   "values": int,              # entries in /world/values batches
+   "properties": {path: [[log_time_ns, kind, value], ...]},   # for each --property PATH,
+                                                              # /world/property and the
+                                                              # /world/values entries
    "calls": [[path.method, op, outcome or null], ...],         # /calls, in order (an
                                                                # outcome named by its call)
    "frames": {topic: {"count", "format", "first_bytes_hex", "size", "timestamp_ns"}}}
@@ -23,6 +27,7 @@ killed recording) is read linearly up to the first record that is cut short.
 
 import base64
 import json
+import struct
 import sys
 
 from mcap.reader import SeekingReader
@@ -40,6 +45,7 @@ def main(argv):
         "metadata": {},
         "attachments": [],
         "channels": {},
+        "values": 0,
         "properties": {p: [] for p in wanted},
         "calls": [],
         "frames": {},
@@ -67,6 +73,14 @@ def main(argv):
         except Exception as e:  # the torn end of a killed recording
             report["complete"] = False
             report["error"] = f"{type(e).__name__}: {e}"
+    # Batch entries name their property by id: resolved now that every id is known.
+    ids = report.pop("_ids", {})
+    for t, pid, kind, value in report.pop("_entries", []):
+        path = ids.get(pid)
+        if path in report["properties"]:
+            report["properties"][path].append([t, kind, value])
+    for rows in report["properties"].values():
+        rows.sort(key=lambda r: r[0])
     report.pop("_calls", None)
     json.dump(report, sys.stdout)
     sys.stdout.write("\n")
@@ -95,7 +109,7 @@ def take(report, schema, channel, message):
             "encoding": channel.message_encoding,
             "count": 0,
             "monotonic": True,
-            "json": True,
+            "decoded": True,
             "first_ns": message.log_time,
             "last_ns": message.log_time,
         },
@@ -104,14 +118,26 @@ def take(report, schema, channel, message):
     if message.log_time < c["last_ns"]:
         c["monotonic"] = False
     c["last_ns"] = message.log_time
+    topic = channel.topic
+    if channel.message_encoding == "cdr":
+        try:
+            entries = property_values(message.data)
+        except (ValueError, struct.error):
+            c["decoded"] = False
+            return
+        report["values"] += len(entries)
+        report.setdefault("_entries", []).extend(entries)
+        return
     try:
         body = json.loads(message.data)
     except ValueError:
-        c["json"] = False
+        c["decoded"] = False
         return
-    topic = channel.topic
-    if topic == "/world/property" and body.get("path") in report["properties"]:
-        report["properties"][body["path"]].append([message.log_time, body.get("kind"), body.get("value")])
+    if topic == "/world/property":
+        if "id" in body:
+            report.setdefault("_ids", {})[body["id"]] = body.get("path")
+        if body.get("op") != "deleted" and body.get("path") in report["properties"]:
+            report["properties"][body["path"]].append([message.log_time, body.get("kind"), body.get("value")])
     elif topic == "/calls":
         names = report.setdefault("_calls", {})
         if body["op"] == "call":
@@ -129,6 +155,40 @@ def take(report, schema, channel, message):
                 size=len(data),
                 timestamp_ns=ts["sec"] * 1_000_000_000 + ts["nsec"],
             )
+
+
+KINDS = {0: "float", 1: "int", 2: "bool"}
+
+
+def property_values(data):
+    """A /world/values batch (mocu_msgs/msg/PropertyValues, CDR little endian; docs/recording.md):
+    [(log_time_ns, id, kind, value), ...]."""
+    if data[:2] != b"\x00\x01":
+        raise ValueError("not little-endian CDR")
+    at = 4
+
+    def take(align, n):
+        nonlocal at
+        at += (align - (at - 4) % align) % align
+        if at + n > len(data):
+            raise ValueError("cut short")
+        at += n
+        return data[at - n : at]
+
+    first_seq, first_ns = struct.unpack("<QQ", take(8, 16))
+    cols = []
+    for fmt, size in (("I", 4), ("I", 4), ("I", 4), ("B", 1), ("d", 8)):
+        (n,) = struct.unpack("<I", take(4, 4))
+        cols.append(struct.unpack(f"<{n}{fmt}", take(size, n * size)))
+    ids, _seqs, dts, kinds, values = cols
+    if not len(ids) == len(dts) == len(kinds) == len(values):
+        raise ValueError("columns of different lengths")
+    out = []
+    for i, kind in enumerate(kinds):
+        v = values[i]
+        v = int(v) if kind == 1 else bool(v) if kind == 2 else v
+        out.append((first_ns + dts[i], ids[i], KINDS[kind], v))
+    return out
 
 
 if __name__ == "__main__":

@@ -4,8 +4,9 @@
 //! sleeps.
 
 use parking_lot::Mutex;
-use std::sync::{Arc, Weak};
-use std::time::{Duration, Instant, SystemTime};
+use std::sync::atomic::{AtomicI64, Ordering};
+use std::sync::{Arc, OnceLock, Weak};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 /// A source of time for a DataServer. Times are `std::time::Instant`s, so they mix with the
 /// display's and the input engine's times.
@@ -17,6 +18,15 @@ pub trait Clock: Send + Sync + 'static {
     /// system clock's is the system's; a manual clock's moves with it.
     fn wall(&self) -> SystemTime {
         SystemTime::now()
+    }
+
+    /// The time of day at `now`, an instant this clock gave a moment ago: what a change
+    /// stamped when it happened reads (the change feed) without reading a clock twice. By
+    /// default the time of day now; the system clock works it out from `now`, a manual clock
+    /// exactly.
+    fn wall_at(&self, now: Instant) -> SystemTime {
+        let _ = now;
+        self.wall()
     }
 
     /// Called once by each DataServer built on this clock. A clock that moves only when
@@ -36,7 +46,36 @@ impl Clock for SystemClock {
     fn now(&self) -> Instant {
         Instant::now()
     }
+
+    /// `now` plus the offset between the system's time of day and its monotonic clock, read
+    /// again at most [`OFFSET_FOR`] after it was last read: so it follows the system's clock
+    /// being set or slewed within that, and costs no system call otherwise.
+    fn wall_at(&self, now: Instant) -> SystemTime {
+        let base = *BASE.get_or_init(Instant::now);
+        let mono = now.saturating_duration_since(base).as_nanos() as i64;
+        let read = OFFSET_READ_AT.load(Ordering::Relaxed);
+        let offset = if read == i64::MIN || !(0..OFFSET_FOR).contains(&(mono - read)) {
+            let wall = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+            let at = Instant::now().saturating_duration_since(base).as_nanos() as i64;
+            let offset = wall as i64 - at;
+            OFFSET.store(offset, Ordering::Relaxed);
+            OFFSET_READ_AT.store(at, Ordering::Relaxed);
+            offset
+        } else {
+            OFFSET.load(Ordering::Relaxed)
+        };
+        let ns = mono.saturating_add(offset).max(0) as u64;
+        UNIX_EPOCH + Duration::from_nanos(ns)
+    }
 }
+
+/// How long the system clock's [`Clock::wall_at`] trusts the offset it read (ns).
+const OFFSET_FOR: i64 = 100_000_000;
+/// The instant monotonic times count from.
+static BASE: OnceLock<Instant> = OnceLock::new();
+/// The time of day less the monotonic time since [`BASE`] (ns), and when it was read.
+static OFFSET: AtomicI64 = AtomicI64::new(0);
+static OFFSET_READ_AT: AtomicI64 = AtomicI64::new(i64::MIN);
 
 /// A clock that stands still until [`ManualClock::advance`] moves it. Advancing fires every
 /// timer, delayed call and timeout that falls due, before `advance` returns: their jobs are
@@ -123,6 +162,10 @@ impl Clock for ManualClock {
     fn wall(&self) -> SystemTime {
         let since = *self.inner.now.lock() - self.inner.start;
         *self.inner.wall0.lock() + since
+    }
+
+    fn wall_at(&self, now: Instant) -> SystemTime {
+        *self.inner.wall0.lock() + now.saturating_duration_since(self.inner.start)
     }
 
     fn on_advance(&self, fire: Weak<dyn Fn() + Send + Sync>) -> bool {

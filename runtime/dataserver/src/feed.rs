@@ -85,22 +85,37 @@ pub struct Stamped {
 }
 
 /// An open feed: the changes since it was opened, in order. A reader takes them in batches
-/// ([`ChangeFeed::take`]) and sleeps in [`ChangeFeed::wait`]: a writer wakes it only when it
-/// queues onto an empty queue, so a busy world costs one wake-up per batch, not per change.
+/// ([`ChangeFeed::take`], [`ChangeFeed::swap`]) and sleeps in [`ChangeFeed::wait`]: a writer
+/// wakes it only when it queues onto an empty queue, so a busy world costs one wake-up per
+/// batch, not per change.
 pub struct ChangeFeed {
     q: Arc<Queue>,
 }
 
+/// A feed's handle on the server's feed state, where its queue is.
 struct Queue {
-    buf: Mutex<Pending>,
-    ready: Condvar,
-    closed: AtomicBool,
+    state: Arc<Mutex<FeedState>>,
+    id: u64,
+    ready: Arc<Condvar>,
 }
 
-#[derive(Default)]
-struct Pending {
+/// A feed's queue, kept in the feed state: a change is numbered, stamped and queued under
+/// one lock.
+struct Open {
+    id: u64,
+    ready: Arc<Condvar>,
     changes: Vec<Stamped>,
     woken: bool,
+}
+
+impl Open {
+    fn push(&mut self, s: Stamped) {
+        let was_empty = self.changes.is_empty();
+        self.changes.push(s);
+        if was_empty {
+            self.ready.notify_all();
+        }
+    }
 }
 
 /// Wakes a reader waiting in [`ChangeFeed::wait`] (its other inputs have something).
@@ -109,15 +124,30 @@ pub struct FeedWaker(Arc<Queue>);
 
 impl FeedWaker {
     pub fn wake(&self) {
-        self.0.buf.lock().woken = true;
+        self.0.with(|o| o.woken = true);
         self.0.ready.notify_all();
+    }
+}
+
+impl Queue {
+    /// `f` on this feed's queue, under the feed state's lock (`None` once it is closed).
+    fn with<R>(&self, f: impl FnOnce(&mut Open) -> R) -> Option<R> {
+        let mut st = self.state.lock();
+        st.queues.iter_mut().find(|o| o.id == self.id).map(f)
     }
 }
 
 impl ChangeFeed {
     /// Every change queued now, taken off the queue.
     pub fn take(&self) -> Vec<Stamped> {
-        std::mem::take(&mut self.q.buf.lock().changes)
+        self.q.with(|o| std::mem::take(&mut o.changes)).unwrap_or_default()
+    }
+
+    /// Every change queued now, swapped into `buf` (which should be empty): the queue keeps
+    /// `buf`'s capacity, so a reader that hands back its drained buffer each time costs the
+    /// writers no reallocation.
+    pub fn swap(&self, buf: &mut Vec<Stamped>) {
+        self.q.with(|o| std::mem::swap(&mut o.changes, buf));
     }
 
     /// Every change queued now, without waiting (as [`ChangeFeed::take`]).
@@ -128,12 +158,17 @@ impl ChangeFeed {
     /// Waits until a change is queued, the feed is woken ([`FeedWaker`]) or `timeout`
     /// passes; returns whether a change is queued.
     pub fn wait(&self, timeout: Duration) -> bool {
-        let mut p = self.q.buf.lock();
-        if p.changes.is_empty() && !p.woken {
-            let _ = self.q.ready.wait_for(&mut p, timeout);
+        let id = self.q.id;
+        let mut st = self.q.state.lock();
+        let idle = |st: &FeedState| {
+            st.queues.iter().find(|o| o.id == id).is_some_and(|o| o.changes.is_empty() && !o.woken)
+        };
+        if idle(&st) {
+            let _ = self.q.ready.wait_for(&mut st, timeout);
         }
-        p.woken = false;
-        !p.changes.is_empty()
+        let Some(o) = st.queues.iter_mut().find(|o| o.id == id) else { return false };
+        o.woken = false;
+        !o.changes.is_empty()
     }
 
     /// A handle that wakes [`ChangeFeed::wait`].
@@ -143,7 +178,7 @@ impl ChangeFeed {
 
     /// How many changes are queued.
     pub fn len(&self) -> usize {
-        self.q.buf.lock().changes.len()
+        self.q.with(|o| o.changes.len()).unwrap_or(0)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -153,14 +188,15 @@ impl ChangeFeed {
 
 impl Drop for ChangeFeed {
     fn drop(&mut self) {
-        self.q.closed.store(true, Ordering::Relaxed);
+        let id = self.q.id;
+        self.q.state.lock().queues.retain(|o| o.id != id);
     }
 }
 
 #[derive(Default)]
 pub(crate) struct Feeds {
     open: AtomicBool,
-    state: Mutex<FeedState>,
+    state: Arc<Mutex<FeedState>>,
 }
 
 #[derive(Default)]
@@ -168,7 +204,8 @@ struct FeedState {
     seq: u64,
     calls: u64,
     last: Option<SystemTime>,
-    queues: Vec<Arc<Queue>>,
+    next_id: u64,
+    queues: Vec<Open>,
 }
 
 impl Feeds {
@@ -190,32 +227,37 @@ impl DataServer {
     /// Opens a change feed: from now on every change, call, outcome and stream message of
     /// this server is queued on it, stamped and numbered when it happened.
     pub fn change_feed(&self) -> ChangeFeed {
-        let q = Arc::new(Queue {
-            buf: Mutex::new(Pending::default()),
-            ready: Condvar::new(),
-            closed: AtomicBool::new(false),
-        });
         let feeds = &self.inner.feeds;
+        let ready = Arc::new(Condvar::new());
         let mut st = feeds.state.lock();
-        st.queues.push(q.clone());
+        st.next_id += 1;
+        let id = st.next_id;
+        st.queues.push(Open { id, ready: ready.clone(), changes: Vec::new(), woken: false });
         feeds.open.store(true, Ordering::Relaxed);
-        ChangeFeed { q }
+        ChangeFeed { q: Arc::new(Queue { state: feeds.state.clone(), id, ready }) }
     }
 
     /// Hands a change to every open feed; `change` is built only when one is open. Called
     /// under the lock that makes the change, so the order of numbers is the order of changes.
     pub(crate) fn emit(&self, change: impl FnOnce() -> Change) {
+        if self.inner.feeds.is_open() {
+            self.emit_at(self.inner.timer.clock().now(), change);
+        }
+    }
+
+    /// [`DataServer::emit`] for a change that happened at `now` (the clock's instant the
+    /// caller read already: the time of day is worked out from it, not read again).
+    pub(crate) fn emit_at(&self, now: std::time::Instant, change: impl FnOnce() -> Change) {
         let feeds = &self.inner.feeds;
         if !feeds.is_open() {
             return;
         }
         let mut st = feeds.state.lock();
-        st.queues.retain(|q| !q.closed.load(Ordering::Relaxed));
         if st.queues.is_empty() {
             feeds.open.store(false, Ordering::Relaxed);
             return;
         }
-        let now = self.wall_time();
+        let now = self.inner.timer.clock().wall_at(now);
         let wall = match st.last {
             Some(last) if last > now => last,
             _ => now,
@@ -223,14 +265,12 @@ impl DataServer {
         st.last = Some(wall);
         st.seq += 1;
         let stamped = Stamped { seq: st.seq, wall, change: change() };
-        for q in &st.queues {
-            let mut p = q.buf.lock();
-            let was_empty = p.changes.is_empty();
-            p.changes.push(stamped.clone());
-            drop(p);
-            if was_empty {
-                q.ready.notify_all();
-            }
+        // The last feed takes the change itself; others (rare: one recorder is the rule)
+        // a copy.
+        let (last, others) = st.queues.split_last_mut().expect("not empty: checked above");
+        for o in others {
+            o.push(stamped.clone());
         }
+        last.push(stamped);
     }
 }

@@ -42,7 +42,7 @@ impl DataServer {
         }
         let value = validate(guid, &os, name, &meta, value)?;
         let meta = (meta != PropMeta::default()).then(|| Arc::new(meta));
-        self.emit(|| Change::PropertySet {
+        self.emit_at(now, || Change::PropertySet {
             object: guid,
             name,
             value: value.clone(),
@@ -92,7 +92,7 @@ impl DataServer {
                     property: name,
                 });
             }
-            self.emit(|| Change::PropertySet {
+            self.emit_at(now, || Change::PropertySet {
                 object: guid,
                 name,
                 value: value.clone(),
@@ -111,7 +111,7 @@ impl DataServer {
             return Ok(());
         }
         p.value = value.clone();
-        self.emit(|| Change::PropertySet {
+        self.emit_at(now, || Change::PropertySet {
             object: guid,
             name,
             value: value.clone(),

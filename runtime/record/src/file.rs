@@ -2,7 +2,7 @@
 //! channel's `log_time` is held from going back; a chunk is closed and the file flushed at
 //! least once a second, so a killed recording loses at most that.
 
-use crate::schemas;
+use crate::{schemas, values};
 use mcap::records::MessageHeader;
 use mcap::{Compression, WriteOptions, Writer};
 use std::collections::{BTreeMap, HashMap};
@@ -17,6 +17,7 @@ pub(crate) struct Out {
     w: Writer<BufWriter<File>>,
     pub object: u16,
     pub property: u16,
+    pub values: u16,
     pub snapshot: u16,
     pub calls: u16,
     pub events: u16,
@@ -61,6 +62,10 @@ impl Out {
         let property =
             channel(&mut w, "/world/property", ("mocu.PropertyChange", &schemas::property()))
                 .map_err(err)?;
+        let values_schema =
+            w.add_schema(values::SCHEMA_NAME, "ros2msg", values::SCHEMA.as_bytes()).map_err(err)?;
+        let values =
+            w.add_channel(values_schema, "/world/values", "cdr", &BTreeMap::new()).map_err(err)?;
         let snapshot =
             channel(&mut w, "/world/snapshot", ("mocu.WorldSnapshot", &schemas::snapshot()))
                 .map_err(err)?;
@@ -88,6 +93,7 @@ impl Out {
             w,
             object,
             property,
+            values,
             snapshot,
             calls,
             events,

@@ -15,6 +15,7 @@ mod file;
 mod json;
 mod schemas;
 mod translate;
+mod values;
 mod world;
 
 use crossbeam_channel::{Receiver, Sender};
@@ -99,7 +100,7 @@ impl Recorder {
         let mut out = file::Out::create(path)?;
         let now = nanos(ds.wall_time());
         let mut meta = BTreeMap::new();
-        meta.insert("format".to_string(), "1".to_string());
+        meta.insert("format".to_string(), "2".to_string());
         meta.insert("command".to_string(), header.command.clone());
         meta.insert("target".to_string(), header.target.clone());
         meta.insert("layout".to_string(), header.layout.clone());
@@ -195,6 +196,7 @@ fn synced(
     for c in feed.take() {
         t.change(c)?;
     }
+    t.write_values()?;
     let _ = done.send(());
     Ok(())
 }
@@ -211,6 +213,8 @@ fn write_loop(
 ) -> Result<Totals, String> {
     let mut t = translate::Translator::new(out, start, existing)?;
     let mut dirty_since: Option<Instant> = None;
+    // The feed's buffer and ours trade places at each take: neither reallocates.
+    let mut taken = Vec::new();
     loop {
         // Asleep until something comes, or until the open chunk is due on disk.
         let wait = dirty_since.map_or(Duration::from_secs(3600), |d| {
@@ -220,9 +224,11 @@ fn write_loop(
             std::thread::sleep(GATHER);
         }
         let before = t.written();
-        for c in feed.take() {
+        feed.swap(&mut taken);
+        for c in taken.drain(..) {
             t.change(c)?;
         }
+        t.write_values()?;
         let mut open = true;
         loop {
             match events.try_recv() {

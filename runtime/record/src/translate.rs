@@ -2,9 +2,10 @@
 //! docs/recording.md.
 
 use crate::file::{Dynamic, Out};
+use crate::values::{self, Batch};
 use crate::world::{self, World};
 use crate::{Event, EventTopic, Totals, json, nanos};
-use mocu_dataserver::{CallOutcome, Change, Guid, Stamped, Value};
+use mocu_dataserver::{CallOutcome, Change, Guid, PropName, Stamped, Value};
 use std::collections::{HashMap, HashSet};
 
 /// A keyframe at least this often (nanoseconds of `log_time`) …
@@ -20,6 +21,10 @@ pub(crate) struct Translator {
     out: Out,
     world: World,
     buf: Vec<u8>,
+    /// The `/world/values` batch being gathered.
+    batch: Batch,
+    /// `lat`, `lon`, `alt`: the names a `/location/…` fix is made of.
+    place_names: [PropName; 3],
     /// Calls not recorded, until their outcome comes.
     skipped: HashSet<u64>,
     /// Each object's last `lat`, `lon`, `alt`.
@@ -37,6 +42,8 @@ impl Translator {
             out,
             world: World::new(),
             buf: Vec::with_capacity(4096),
+            batch: Batch::default(),
+            place_names: [PropName::new("lat"), PropName::new("lon"), PropName::new("alt")],
             skipped: HashSet::new(),
             places: HashMap::new(),
             last_seq: 0,
@@ -74,7 +81,21 @@ impl Translator {
         Ok(t)
     }
 
+    /// Writes the `/world/values` batch gathered so far, if any.
+    pub fn write_values(&mut self) -> Result<(), String> {
+        if self.batch.is_empty() {
+            return Ok(());
+        }
+        let (seq, t) = self.batch.first();
+        self.batch.encode(&mut self.buf);
+        let ch = self.out.values;
+        self.out.write(ch, seq, t, &self.buf)?;
+        Ok(())
+    }
+
     fn snapshot(&mut self) -> Result<(), String> {
+        // Every change before the keyframe is on the file before it.
+        self.write_values()?;
         self.buf.clear();
         self.world.snapshot(self.last_seq, &mut self.buf);
         let ch = self.out.snapshot;
@@ -153,44 +174,64 @@ impl Translator {
                 self.out.object
             }
             Change::PropertySet { object, name, value, meta, created } => {
-                b.extend_from_slice(if created {
-                    b"{\"op\":\"created\",\"object\":"
+                let (id, new) = self.world.set(object, name, &value, &meta);
+                self.since_snapshot += 1;
+                let entry = if created || new { None } else { values::numeric(&value) };
+                if let Some((kind, x)) = entry {
+                    if !self.batch.fits(s.seq, t) {
+                        self.write_values()?;
+                    }
+                    self.batch.push(id, s.seq, t, kind, x);
                 } else {
-                    b"{\"op\":\"set\",\"object\":"
-                });
+                    let b = &mut self.buf;
+                    b.clear();
+                    b.extend_from_slice(if created {
+                        b"{\"op\":\"created\",\"id\":"
+                    } else {
+                        b"{\"op\":\"set\",\"id\":"
+                    });
+                    json::uint(b, u64::from(id));
+                    b.extend_from_slice(b",\"object\":");
+                    json::uint(b, object.get());
+                    b.extend_from_slice(b",\"path\":");
+                    json::dotted(b, &self.world.path(object), name.as_str());
+                    b.extend_from_slice(b",\"name\":");
+                    json::string(b, name.as_str());
+                    b.extend_from_slice(b",\"kind\":\"");
+                    b.extend_from_slice(value.kind().name().as_bytes());
+                    b.extend_from_slice(b"\",\"value\":");
+                    json::value(b, &value);
+                    if let Some(units) = meta.as_ref().and_then(|m| m.units.as_deref()) {
+                        b.extend_from_slice(b",\"unit\":");
+                        json::string(b, units);
+                    }
+                    if created && let Some(m) = &meta {
+                        b.extend_from_slice(b",\"meta\":");
+                        world::meta(b, m);
+                    }
+                    b.push(b'}');
+                    let ch = self.out.property;
+                    self.out.write(ch, s.seq, t, &self.buf)?;
+                }
+                match self.place_names.iter().position(|&n| n == name) {
+                    Some(i) => return self.place(object, i, &value, s.seq, t),
+                    None => return Ok(()),
+                }
+            }
+            Change::PropertyDeleted { object, name } => {
+                let id = self.world.delete_property(object, name);
+                b.extend_from_slice(b"{\"op\":\"deleted\"");
+                if let Some(id) = id {
+                    b.extend_from_slice(b",\"id\":");
+                    json::uint(b, u64::from(id));
+                }
+                b.extend_from_slice(b",\"object\":");
                 json::uint(b, object.get());
                 b.extend_from_slice(b",\"path\":");
                 json::dotted(b, &self.world.path(object), name.as_str());
                 b.extend_from_slice(b",\"name\":");
                 json::string(b, name.as_str());
-                b.extend_from_slice(b",\"kind\":\"");
-                b.extend_from_slice(value.kind().name().as_bytes());
-                b.extend_from_slice(b"\",\"value\":");
-                json::value(b, &value);
-                if let Some(units) = meta.as_ref().and_then(|m| m.units.as_deref()) {
-                    b.extend_from_slice(b",\"unit\":");
-                    json::string(b, units);
-                }
-                if created && let Some(m) = &meta {
-                    b.extend_from_slice(b",\"meta\":");
-                    world::meta(b, m);
-                }
                 b.push(b'}');
-                self.world.set(object, name, &value, &meta);
-                self.since_snapshot += 1;
-                let ch = self.out.property;
-                self.out.write(ch, s.seq, t, &self.buf)?;
-                return self.place(object, name.as_str(), &value, s.seq, t);
-            }
-            Change::PropertyDeleted { object, name } => {
-                b.extend_from_slice(b"{\"op\":\"deleted\",\"object\":");
-                json::uint(b, object.get());
-                b.extend_from_slice(b",\"path\":");
-                json::string(b, &format!("{}.{name}", self.world.path(object)));
-                b.extend_from_slice(b",\"name\":");
-                json::string(b, name.as_str());
-                b.push(b'}');
-                self.world.delete_property(object, name);
                 self.since_snapshot += 1;
                 self.out.property
             }
@@ -278,20 +319,7 @@ impl Translator {
     }
 
     /// A `lat`, `lon` or `alt` change: the object's `foxglove.LocationFix`.
-    fn place(
-        &mut self,
-        object: Guid,
-        name: &str,
-        v: &Value,
-        seq: u64,
-        t: u64,
-    ) -> Result<(), String> {
-        let i = match name {
-            "lat" => 0,
-            "lon" => 1,
-            "alt" => 2,
-            _ => return Ok(()),
-        };
+    fn place(&mut self, object: Guid, i: usize, v: &Value, seq: u64, t: u64) -> Result<(), String> {
         let entry = self.places.entry(object).or_default();
         entry[i] = v.as_f64();
         let [Some(lat), Some(lon), alt] = *entry else { return Ok(()) };
@@ -365,10 +393,12 @@ impl Translator {
     }
 
     pub fn flush(&mut self) -> Result<(), String> {
+        self.write_values()?;
         self.out.flush()
     }
 
-    pub fn finish(self) -> Result<Totals, String> {
+    pub fn finish(mut self) -> Result<Totals, String> {
+        self.write_values()?;
         let totals = Totals { messages: self.out.messages, bytes: self.out.bytes };
         self.out.finish()?;
         Ok(totals)

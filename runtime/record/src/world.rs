@@ -1,11 +1,13 @@
 //! The recorder's mirror of the world model, kept from the change feed alone: each object's
 //! parent, position, names and properties, and its dotted path. It names what a message
-//! is about (`root.vehicles.usv1.nav.speed`) and is what a `/world/snapshot` keyframe
-//! writes, so a keyframe is exactly consistent with the changes before it.
+//! is about (`root.vehicles.usv1.nav.speed`), numbers each property (the `id` that
+//! `/world/values` entries refer to), and is what a `/world/snapshot` keyframe writes, so a
+//! keyframe is exactly consistent with the changes before it.
 
 use crate::json;
 use mocu_dataserver::{Guid, ObjectInfo, PropMeta, PropName, Value};
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
 
 pub(crate) struct Obj {
@@ -13,10 +15,19 @@ pub(crate) struct Obj {
     pub info: ObjectInfo,
     pub path: Arc<str>,
     pub children: Vec<Guid>,
-    pub props: Vec<Prop>,
+    /// Its properties' ids, in the order they were created.
+    pub props: Vec<u32>,
 }
 
+/// A property as read from the world when the recording started.
 pub(crate) struct Prop {
+    pub name: PropName,
+    pub value: Value,
+    pub meta: Option<Arc<PropMeta>>,
+}
+
+/// A property the recording knows, by its id.
+pub(crate) struct Slot {
     pub name: PropName,
     pub value: Value,
     pub meta: Option<Arc<PropMeta>>,
@@ -67,8 +78,38 @@ pub(crate) fn walk(ds: &mocu_dataserver::DataServer) -> Vec<Existing> {
     out
 }
 
+/// A multiply-rotate hash (rustc's FxHash) for the ids map: its keys are small integers
+/// the recorder chose or interned, not attacker-controlled, and it is looked up once per
+/// change.
+#[derive(Default)]
+pub(crate) struct Fx(u64);
+
+impl Hasher for Fx {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+
+    fn write_u32(&mut self, i: u32) {
+        self.write_u64(u64::from(i));
+    }
+
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
 pub(crate) struct World {
     objects: HashMap<Guid, Obj>,
+    /// Each live property's id (ids are never reused within a recording).
+    ids: HashMap<(Guid, PropName), u32, BuildHasherDefault<Fx>>,
+    /// By id; `None` once deleted.
+    slots: Vec<Option<Slot>>,
 }
 
 impl World {
@@ -80,7 +121,11 @@ impl World {
             children: Vec::new(),
             props: Vec::new(),
         };
-        World { objects: HashMap::from([(Guid::ROOT, root)]) }
+        World {
+            objects: HashMap::from([(Guid::ROOT, root)]),
+            ids: HashMap::default(),
+            slots: Vec::new(),
+        }
     }
 
     pub fn get(&self, g: Guid) -> Option<&Obj> {
@@ -139,27 +184,53 @@ impl World {
         let mut stack = vec![g];
         while let Some(x) = stack.pop() {
             if let Some(o) = self.objects.remove(&x) {
+                for id in o.props {
+                    if let Some(s) = self.slots.get_mut(id as usize).and_then(Option::take) {
+                        self.ids.remove(&(x, s.name));
+                    }
+                }
                 stack.extend(o.children);
             }
         }
     }
 
-    /// Sets a property; returns the object's path.
-    pub fn set(&mut self, g: Guid, name: PropName, value: &Value, meta: &Option<Arc<PropMeta>>) {
-        let Some(o) = self.objects.get_mut(&g) else { return };
-        match o.props.iter_mut().find(|p| p.name == name) {
-            Some(p) => {
-                p.value = value.clone();
-                p.meta = meta.clone();
+    /// Sets a property; returns its id and whether the recording did not know it before
+    /// (a new id).
+    pub fn set(
+        &mut self,
+        g: Guid,
+        name: PropName,
+        value: &Value,
+        meta: &Option<Arc<PropMeta>>,
+    ) -> (u32, bool) {
+        if let Some(&id) = self.ids.get(&(g, name))
+            && let Some(Some(s)) = self.slots.get_mut(id as usize)
+        {
+            s.value = value.clone();
+            if s.meta.as_ref().map(Arc::as_ptr) != meta.as_ref().map(Arc::as_ptr) {
+                s.meta = meta.clone();
             }
-            None => o.props.push(Prop { name, value: value.clone(), meta: meta.clone() }),
+            return (id, false);
         }
+        let id = self.slots.len() as u32;
+        self.slots.push(Some(Slot { name, value: value.clone(), meta: meta.clone() }));
+        self.ids.insert((g, name), id);
+        if let Some(o) = self.objects.get_mut(&g) {
+            o.props.push(id);
+        }
+        (id, true)
     }
 
-    pub fn delete_property(&mut self, g: Guid, name: PropName) {
-        if let Some(o) = self.objects.get_mut(&g) {
-            o.props.retain(|p| p.name != name);
+    /// Deletes a property; returns the id it had.
+    pub fn delete_property(&mut self, g: Guid, name: PropName) -> Option<u32> {
+        let id = self.ids.remove(&(g, name))?;
+        if let Some(s) = self.slots.get_mut(id as usize) {
+            *s = None;
         }
+        if let Some(o) = self.objects.get_mut(&g) {
+            o.props.retain(|&p| p != id);
+        }
+        Some(id)
     }
 
     /// Recomputes the paths of `g`'s subtree (after a rename or a move).
@@ -207,11 +278,15 @@ impl World {
             json::uint(out, index.unwrap_or(0) as u64);
             info(out, &o.info);
             out.extend_from_slice(b",\"properties\":[");
-            for (i, p) in o.props.iter().enumerate() {
+            let live =
+                o.props.iter().filter_map(|&id| Some((id, self.slots.get(id as usize)?.as_ref()?)));
+            for (i, (id, p)) in live.enumerate() {
                 if i > 0 {
                     out.push(b',');
                 }
-                out.extend_from_slice(b"{\"name\":");
+                out.extend_from_slice(b"{\"id\":");
+                json::uint(out, u64::from(id));
+                out.extend_from_slice(b",\"name\":");
                 json::string(out, p.name.as_str());
                 out.extend_from_slice(b",\"kind\":\"");
                 out.extend_from_slice(p.value.kind().name().as_bytes());

@@ -16,15 +16,59 @@ fn manual() -> (DataServer, ManualClock) {
     (DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
 }
 
-/// Every message: (topic, log_time in ns since T0, JSON).
+/// Every message: (topic, log_time in ns since T0, JSON); each entry of a `/world/values`
+/// batch as a message of its own, `{"id", "seq", "kind", "value"}` at its own time.
 fn read(path: &std::path::Path) -> Vec<(String, u64, Json)> {
     let bytes = std::fs::read(path).unwrap();
-    mcap::MessageStream::new(&bytes)
-        .unwrap()
-        .map(|m| {
-            let m = m.unwrap();
-            let json = serde_json::from_slice(&m.data).unwrap();
-            (m.channel.topic.clone(), m.log_time - T0 * 1_000_000_000, json)
+    let mut out = Vec::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let topic = m.channel.topic.clone();
+        if topic == "/world/values" {
+            assert_eq!(m.channel.message_encoding, "cdr");
+            for (t, j) in entries(&m.data) {
+                out.push((topic.clone(), t - T0 * 1_000_000_000, j));
+            }
+            continue;
+        }
+        let json = serde_json::from_slice(&m.data).unwrap();
+        out.push((topic, m.log_time - T0 * 1_000_000_000, json));
+    }
+    out
+}
+
+/// A `mocu_msgs/msg/PropertyValues` batch (CDR, docs/recording.md), read as the doc lays it
+/// out: (log time, entry).
+fn entries(d: &[u8]) -> Vec<(u64, Json)> {
+    assert_eq!(&d[..4], &[0, 1, 0, 0], "little-endian CDR");
+    let mut at = 4;
+    let mut take = |align: usize, n: usize| {
+        at += (align - (at - 4) % align) % align;
+        at += n;
+        &d[at - n..at]
+    };
+    let u64_ = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap());
+    let u32_ = |b: &[u8]| u32::from_le_bytes(b.try_into().unwrap());
+    let (first_seq, first_ns) = (u64_(take(8, 8)), u64_(take(8, 8)));
+    let mut cols: Vec<Vec<u8>> = Vec::new();
+    for size in [4, 4, 4, 1, 8] {
+        let n = u32_(take(4, 4)) as usize;
+        cols.push(take(size, n * size).to_vec());
+    }
+    let n = cols[3].len();
+    (0..n)
+        .map(|i| {
+            let w = |c: usize| u32_(&cols[c][4 * i..4 * i + 4]);
+            let x = f64::from_le_bytes(cols[4][8 * i..8 * i + 8].try_into().unwrap());
+            let (kind, value) = match cols[3][i] {
+                0 => ("float", Json::from(x)),
+                1 => ("int", Json::from(x as i64)),
+                2 => ("bool", Json::from(x != 0.0)),
+                k => panic!("kind {k}"),
+            };
+            let j = serde_json::json!({"id": w(0), "seq": first_seq + u64::from(w(1)),
+                                       "kind": kind, "value": value});
+            (first_ns + u64::from(w(2)), j)
         })
         .collect()
 }
@@ -68,7 +112,6 @@ fn a_property_change_is_recorded_with_its_path_unit_kind_and_the_time_it_was_wri
         rows,
         vec![
             (0, "\"created\"".into(), "\"root.usv1.nav.speed\"".into(), Json::from(0.0)),
-            (1_500_000_000, "\"set\"".into(), "\"root.usv1.nav.speed\"".into(), Json::from(3.25)),
             (
                 2_000_000_000,
                 "\"created\"".into(),
@@ -77,10 +120,47 @@ fn a_property_change_is_recorded_with_its_path_unit_kind_and_the_time_it_was_wri
             ),
         ]
     );
-    assert_eq!(props[1].2["unit"], "m/s");
-    assert_eq!(props[1].2["kind"], "float");
+    assert_eq!(props[0].2["unit"], "m/s");
+    assert_eq!(props[0].2["kind"], "float");
     assert_eq!(props[0].2["meta"]["units"], "m/s");
-    assert!(props[2].2.get("unit").is_none());
+    assert!(props[1].2.get("unit").is_none());
+    assert_ne!(props[0].2["id"], props[1].2["id"]);
+    // The numeric change goes in a batch, by the id `created` gave the property.
+    let values = on(&msgs, "/world/values");
+    assert_eq!(values.len(), 1, "{values:?}");
+    assert_eq!(values[0].1, 1_500_000_000);
+    assert_eq!(values[0].2["id"], props[0].2["id"]);
+    assert_eq!((&values[0].2["kind"], &values[0].2["value"]), (&"float".into(), &3.25.into()));
+}
+
+#[test]
+fn numbers_go_in_batches_with_their_kind_and_number_and_other_values_in_json_in_one_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("o", "thing")).unwrap();
+    ds.set(o, "n", Value::Int(1)).unwrap();
+    ds.set(o, "b", Value::Bool(false)).unwrap();
+    ds.set(o, "s", Value::str("a")).unwrap();
+    clock.advance(ms(10));
+    ds.set(o, "n", Value::Int(-7)).unwrap();
+    ds.set(o, "s", Value::str("b")).unwrap();
+    ds.set(o, "b", Value::Bool(true)).unwrap();
+    ds.set(o, "n", Value::Int(1 << 60)).unwrap(); // not exact as a float64: JSON
+    rec.finish().unwrap();
+    let msgs = read(&file);
+    let mut changes: Vec<(u64, Json)> = msgs
+        .iter()
+        .filter(|(t, _, j)| t == "/world/values" || (t == "/world/property" && j["op"] == "set"))
+        .map(|(_, _, j)| (j["seq"].as_u64().unwrap_or(0), j["value"].clone()))
+        .collect();
+    let json_sets = changes.iter().filter(|c| c.0 == 0).count();
+    assert_eq!(json_sets, 2, "the string and the large integer: {changes:?}");
+    changes.retain(|c| c.0 > 0);
+    assert_eq!(changes, vec![(5, Json::from(-7)), (7, Json::from(true))]);
+    let values = on(&msgs, "/world/values");
+    assert_eq!((values[0].1, &values[0].2["kind"]), (10_000_000, &"int".into()));
 }
 
 #[test]
@@ -200,9 +280,9 @@ fn a_keyframe_holds_the_world_as_the_changes_before_it_left_it() {
         world["objects"],
         serde_json::json!([
             {"guid": a.get(), "parent": 1, "index": 0, "name": "a", "type": "thing", "subtype": "",
-             "properties": [{"name": "y", "kind": "string", "value": "second"}]},
+             "properties": [{"id": 1, "name": "y", "kind": "string", "value": "second"}]},
             {"guid": b.get(), "parent": a.get(), "index": 0, "name": "b", "type": "thing", "subtype": "",
-             "properties": [{"name": "x", "kind": "int", "value": 1, "meta": {"kind": "int", "units": "m"}}]}
+             "properties": [{"id": 0, "name": "x", "kind": "int", "value": 1, "meta": {"kind": "int", "units": "m"}}]}
         ])
     );
 }
@@ -254,11 +334,12 @@ fn what_existed_before_the_recording_started_is_its_first_records_and_first_keyf
     let msgs = read(&file);
     let objects = on(&msgs, "/world/object");
     assert_eq!((objects[0].1, &objects[0].2["path"]), (100_000_000, &"root.usv1".into()));
-    let fuel: Vec<(String, f64)> = on(&msgs, "/world/property")
+    let fuel: Vec<(&str, f64)> = msgs
         .iter()
-        .map(|(_, _, j)| (j["op"].as_str().unwrap().into(), j["value"].as_f64().unwrap()))
+        .filter(|(t, _, _)| t.starts_with("/world/property") || t == "/world/values")
+        .map(|(_, _, j)| (j["op"].as_str().unwrap_or("value"), j["value"].as_f64().unwrap()))
         .collect();
-    assert_eq!(fuel, vec![("created".into(), 0.5), ("set".into(), 0.4)]);
+    assert_eq!(fuel, vec![("created", 0.5), ("value", 0.4)]);
     let snap = &on(&msgs, "/world/snapshot")[0].2;
     assert_eq!(snap["seq"], 0);
     assert_eq!(snap["objects"][0]["properties"][0]["value"], 0.5);

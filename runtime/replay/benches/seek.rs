@@ -13,7 +13,7 @@ use mocu_replay::Player;
 use support::{Synthetic, write};
 
 const HOUR: Synthetic =
-    Synthetic { seconds: 3600, vehicles: 4, props: 20, hz: 20, keyframe_secs: 10 };
+    Synthetic { seconds: 3600, vehicles: 4, props: 20, hz: 20, keyframe_secs: 10, batch_steps: 2 };
 
 fn seek(c: &mut Criterion) {
     let dir = tempfile::tempdir().unwrap();

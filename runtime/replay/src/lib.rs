@@ -25,7 +25,7 @@ mod value;
 mod world;
 
 pub use file::{Meta, RawMessage, Recording, ReplayError};
-pub use message::{ObjectChange, PropertyChange, Snapshot, SnapshotObject};
+pub use message::{ObjectChange, PropertyChange, Snapshot, SnapshotObject, ValueEntry, values};
 pub use player::Player;
 pub use world::World;
 
@@ -34,4 +34,5 @@ pub mod topics {
     pub const OBJECT: &str = "/world/object";
     pub const PROPERTY: &str = "/world/property";
     pub const SNAPSHOT: &str = "/world/snapshot";
+    pub const VALUES: &str = "/world/values";
 }

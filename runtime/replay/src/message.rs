@@ -1,4 +1,5 @@
-//! The messages replay applies, parsed from their JSON (docs/recording.md, "Channels").
+//! The messages replay applies, parsed from their JSON (docs/recording.md, "Channels"),
+//! and `/world/values` batches from their CDR.
 
 use crate::value::decode;
 use mocu_dataserver::{ObjectInfo, PropMeta, Value, ValueKind};
@@ -24,12 +25,90 @@ pub enum ObjectChange {
     },
 }
 
-/// `/world/property`: a property created (with its metadata), set or deleted.
+/// `/world/property`: a property created (with its metadata), set or deleted. `id`: the
+/// number `/world/values` entries refer to it by (absent in recordings before batches).
 #[derive(Clone, Debug, PartialEq)]
 pub enum PropertyChange {
-    Created { object: u64, name: String, value: Value, meta: Option<PropMeta> },
-    Set { object: u64, name: String, value: Value },
-    Deleted { object: u64, name: String },
+    Created { id: Option<u32>, object: u64, name: String, value: Value, meta: Option<PropMeta> },
+    Set { id: Option<u32>, object: u64, name: String, value: Value },
+    Deleted { id: Option<u32>, object: u64, name: String },
+}
+
+/// One entry of a `/world/values` batch: property `id` took `value` in change `seq` at
+/// `log_time`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ValueEntry {
+    pub id: u32,
+    pub seq: u64,
+    pub log_time: u64,
+    pub value: Value,
+}
+
+/// Reads CDR (little endian; alignment counted from after the 4-byte header).
+struct Cdr<'a> {
+    data: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Cdr<'a> {
+    fn take(&mut self, align: usize, n: usize) -> Option<&'a [u8]> {
+        let body = self.at - 4;
+        self.at += (align - body % align) % align;
+        let out = self.data.get(self.at..self.at.checked_add(n)?)?;
+        self.at += n;
+        Some(out)
+    }
+
+    fn u64(&mut self) -> Option<u64> {
+        Some(u64::from_le_bytes(self.take(8, 8)?.try_into().ok()?))
+    }
+
+    fn u32(&mut self) -> Option<u32> {
+        Some(u32::from_le_bytes(self.take(4, 4)?.try_into().ok()?))
+    }
+
+    /// A sequence of `size`-byte elements.
+    fn seq(&mut self, size: usize) -> Option<&'a [u8]> {
+        let n = self.u32()? as usize;
+        self.take(size, n.checked_mul(size)?)
+    }
+}
+
+/// A `/world/values` batch (`mocu_msgs/msg/PropertyValues`, CDR), entry by entry; `None`
+/// when it is malformed.
+pub fn values(data: &[u8]) -> Option<Vec<ValueEntry>> {
+    if data.get(..2)? != [0, 1] {
+        return None; // not little-endian CDR
+    }
+    let mut c = Cdr { data, at: 4 };
+    let (first_seq, first_ns) = (c.u64()?, c.u64()?);
+    let ids = c.seq(4)?;
+    let seqs = c.seq(4)?;
+    let dts = c.seq(4)?;
+    let kinds = c.seq(1)?;
+    let vals = c.seq(8)?;
+    let n = kinds.len();
+    if ids.len() != 4 * n || seqs.len() != 4 * n || dts.len() != 4 * n || vals.len() != 8 * n {
+        return None;
+    }
+    let u32_at = |b: &[u8], i: usize| u32::from_le_bytes(b[4 * i..4 * i + 4].try_into().unwrap());
+    (0..n)
+        .map(|i| {
+            let x = f64::from_le_bytes(vals[8 * i..8 * i + 8].try_into().ok()?);
+            let value = match kinds[i] {
+                0 => Value::Float(x),
+                1 => Value::Int(x as i64),
+                2 => Value::Bool(x != 0.0),
+                _ => return None,
+            };
+            Some(ValueEntry {
+                id: u32_at(ids, i),
+                seq: first_seq.wrapping_add(u64::from(u32_at(seqs, i))),
+                log_time: first_ns.saturating_add(u64::from(u32_at(dts, i))),
+                value,
+            })
+        })
+        .collect()
 }
 
 /// `/world/snapshot`: the whole world model as of change `seq` (a keyframe).
@@ -47,6 +126,9 @@ pub struct SnapshotObject {
     pub index: usize,
     pub info: ObjectInfo,
     pub properties: Vec<(String, Value, Option<PropMeta>)>,
+    /// Each property's id (`/world/values`), beside `properties`; `None` in recordings
+    /// before batches.
+    pub ids: Vec<Option<u32>>,
 }
 
 fn text<'a>(j: &'a Json, k: &str) -> Option<&'a str> {
@@ -103,17 +185,19 @@ impl PropertyChange {
     pub fn parse(data: &[u8]) -> Option<PropertyChange> {
         let j: Json = serde_json::from_slice(data).ok()?;
         let object = j.get("object")?.as_u64()?;
+        let id = j.get("id").and_then(Json::as_u64).and_then(|i| u32::try_from(i).ok());
         let name = text(&j, "name")?.to_string();
         let value = || decode(text(&j, "kind")?, j.get("value")?);
         Some(match text(&j, "op")? {
             "created" => PropertyChange::Created {
+                id,
                 object,
                 name,
                 value: value()?,
                 meta: j.get("meta").map(meta),
             },
-            "set" => PropertyChange::Set { object, name, value: value()? },
-            "deleted" => PropertyChange::Deleted { object, name },
+            "set" => PropertyChange::Set { id, object, name, value: value()? },
+            "deleted" => PropertyChange::Deleted { id, object, name },
             _ => return None,
         })
     }
@@ -125,6 +209,7 @@ impl Snapshot {
         let mut objects = Vec::new();
         for o in j.get("objects")?.as_array()? {
             let mut properties = Vec::new();
+            let mut ids = Vec::new();
             for p in o.get("properties").and_then(Json::as_array).into_iter().flatten() {
                 let Some(v) =
                     decode(text(p, "kind").unwrap_or(""), p.get("value").unwrap_or(&Json::Null))
@@ -132,6 +217,7 @@ impl Snapshot {
                     continue;
                 };
                 properties.push((text(p, "name")?.to_string(), v, p.get("meta").map(meta)));
+                ids.push(p.get("id").and_then(Json::as_u64).and_then(|i| u32::try_from(i).ok()));
             }
             objects.push(SnapshotObject {
                 guid: o.get("guid")?.as_u64()?,
@@ -139,6 +225,7 @@ impl Snapshot {
                 index: o.get("index").and_then(Json::as_u64).unwrap_or(u64::MAX) as usize,
                 info: info(o)?,
                 properties,
+                ids,
             });
         }
         Some(Snapshot { seq: j.get("seq").and_then(Json::as_u64).unwrap_or(0), objects })
@@ -167,6 +254,7 @@ mod tests {
         assert_eq!(
             PropertyChange::parse(p),
             Some(PropertyChange::Set {
+                id: None,
                 object: 14,
                 name: "speed".into(),
                 value: Value::Float(3.25)

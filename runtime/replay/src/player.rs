@@ -4,10 +4,10 @@
 //! across a seek back).
 
 use crate::file::{RawMessage, Recording, ReplayError};
-use crate::message::{ObjectChange, PropertyChange, Snapshot};
-use crate::topics::{OBJECT, PROPERTY, SNAPSHOT};
+use crate::message::{ObjectChange, PropertyChange, Snapshot, values};
+use crate::topics::{OBJECT, PROPERTY, SNAPSHOT, VALUES};
 use crate::world::World;
-use mocu_dataserver::{Clock, DataServer, ManualClock};
+use mocu_dataserver::{Clock, DataServer, ManualClock, Value};
 use std::collections::{HashMap, VecDeque};
 use std::path::Path;
 use std::sync::Arc;
@@ -23,8 +23,9 @@ pub struct Player {
     world: World,
     /// Log time applied up to (inclusive).
     cursor: u64,
-    /// Messages after `cursor`, up to `loaded_to` (inclusive).
-    ahead: VecDeque<RawMessage>,
+    /// Changes after `cursor`, in (log time, sequence) order: every message up to
+    /// `loaded_to` (inclusive) and every entry of their batches (some of which may be later).
+    ahead: VecDeque<Item>,
     loaded_to: u64,
     /// The clock's instant that stands for log time `anchor.1` (moved at each seek).
     anchor: (Instant, u64),
@@ -123,16 +124,38 @@ impl Player {
             None => true,
             Some(k) => m.log_time > k.log_time || (m.sequence.wrapping_sub(k.sequence) as i32) > 0,
         };
-        let changes: Vec<RawMessage> =
-            self.rec.messages(from, to, &[OBJECT, PROPERTY])?.into_iter().filter(after).collect();
-        for c in coalesce(&changes) {
+        let msgs = self.rec.messages(from, to, &[OBJECT, PROPERTY, VALUES])?;
+        let mut items = Vec::with_capacity(msgs.len());
+        for m in msgs {
+            if &*m.topic == VALUES {
+                // Entries after the keyframe (its `seq`), whatever their batch's time.
+                let seq = snapshot.seq;
+                let entries = values(&m.data).unwrap_or_default();
+                items.extend(entries.into_iter().filter(|e| key.is_none() || e.seq > seq).map(
+                    |e| Item::Value {
+                        time: e.log_time,
+                        seq: e.seq as u32,
+                        id: e.id,
+                        value: e.value,
+                    },
+                ));
+            } else if after(&m) {
+                items.push(Item::Message(m));
+            }
+        }
+        items.sort_by_key(Item::key);
+        // Entries of the batches read that come after `to` are played from there.
+        let split = items.partition_point(|i| i.key().0 <= to);
+        let later = items.split_off(split);
+        for c in coalesce(items) {
             match c {
                 Change::Object(c) => self.world.apply_object(&c),
                 Change::Property(c) => self.world.apply_property(&c),
+                Change::Value(id, v) => self.world.apply_value(id, &v),
             }
         }
         self.cursor = to;
-        self.ahead.clear();
+        self.ahead = later.into();
         self.loaded_to = to;
         self.anchor = (self.clock.now(), to);
         self.clock.set_wall(UNIX_EPOCH + Duration::from_nanos(to));
@@ -147,21 +170,29 @@ impl Player {
             return Ok(());
         }
         loop {
-            if self.ahead.is_empty() && self.loaded_to < to {
+            // What is ahead up to `loaded_to` is complete: a message read later has a later
+            // log time than that, and so have its entries.
+            let ready = |i: &Item| i.key().0 <= self.loaded_to;
+            if self.loaded_to < to && !self.ahead.front().is_some_and(ready) {
                 let hi = self.loaded_to.saturating_add(READ_AHEAD);
-                let msgs = self.rec.messages(self.loaded_to + 1, hi, &[OBJECT, PROPERTY])?;
-                self.ahead.extend(msgs);
+                let msgs =
+                    self.rec.messages(self.loaded_to + 1, hi, &[OBJECT, PROPERTY, VALUES])?;
+                let mut items: Vec<Item> = self.ahead.drain(..).collect();
+                items.extend(expand(msgs));
+                items.sort_by_key(Item::key);
+                self.ahead = items.into();
                 // Past the last message there is nothing more to read.
                 self.loaded_to = if hi >= self.end_ns() { u64::MAX } else { hi };
+                continue;
             }
             match self.ahead.front() {
-                Some(m) if m.log_time <= to => {
-                    let m = self.ahead.pop_front().expect("looked at above");
-                    self.move_clock(m.log_time);
-                    self.apply(&m);
-                    self.cursor = self.cursor.max(m.log_time);
+                Some(i) if i.key().0 <= to && ready(i) => {
+                    let i = self.ahead.pop_front().expect("looked at above");
+                    let t = i.key().0;
+                    self.move_clock(t);
+                    self.apply(i);
+                    self.cursor = self.cursor.max(t);
                 }
-                None if self.loaded_to < to => {}
                 _ => {
                     self.move_clock(to);
                     self.cursor = to;
@@ -190,7 +221,11 @@ impl Player {
         }
     }
 
-    fn apply(&mut self, m: &RawMessage) {
+    fn apply(&mut self, i: Item) {
+        let m = match i {
+            Item::Value { id, value, .. } => return self.world.apply_value(id, &value),
+            Item::Message(m) => m,
+        };
         match &*m.topic {
             OBJECT => {
                 if let Some(c) = ObjectChange::parse(&m.data) {
@@ -207,36 +242,89 @@ impl Player {
     }
 }
 
+/// A change to play: a message, or one entry of a `/world/values` batch.
+enum Item {
+    Message(RawMessage),
+    Value { time: u64, seq: u32, id: u32, value: Value },
+}
+
+impl Item {
+    /// (log time, sequence): the order changes happened in.
+    fn key(&self) -> (u64, u32) {
+        match self {
+            Item::Message(m) => (m.log_time, m.sequence),
+            Item::Value { time, seq, .. } => (*time, *seq),
+        }
+    }
+}
+
+/// Messages as items, each batch as its entries.
+fn expand(msgs: Vec<RawMessage>) -> Vec<Item> {
+    let mut out = Vec::with_capacity(msgs.len());
+    for m in msgs {
+        if &*m.topic == VALUES {
+            let entries = values(&m.data).unwrap_or_default();
+            out.extend(entries.into_iter().map(|e| Item::Value {
+                time: e.log_time,
+                seq: e.seq as u32,
+                id: e.id,
+                value: e.value,
+            }));
+        } else {
+            out.push(Item::Message(m));
+        }
+    }
+    out
+}
+
 /// A parsed change.
 enum Change {
     Object(ObjectChange),
     Property(PropertyChange),
+    Value(u32, Value),
 }
 
 /// The changes of a seek, with the writes of one property between two changes of the world's
 /// shape folded into the last of them: a seek lands on the same world, and the server (and
 /// everyone subscribed to it) sees one write per property instead of every step between.
-fn coalesce(msgs: &[RawMessage]) -> Vec<Change> {
-    let mut out: Vec<Change> = Vec::with_capacity(msgs.len().min(1 << 16));
+fn coalesce(items: Vec<Item>) -> Vec<Change> {
+    let mut out: Vec<Change> = Vec::with_capacity(items.len().min(1 << 16));
     let mut last: HashMap<(u64, String), usize> = HashMap::new();
-    for m in msgs {
+    let mut last_value: HashMap<u32, usize> = HashMap::new();
+    for i in items {
+        let m = match i {
+            Item::Value { id, value, .. } => {
+                fold(&mut out, &mut last_value, id, Change::Value(id, value));
+                continue;
+            }
+            Item::Message(m) => m,
+        };
         match &*m.topic {
             OBJECT => {
                 if let Some(c) = ObjectChange::parse(&m.data) {
                     last.clear();
+                    last_value.clear();
                     out.push(Change::Object(c));
                 }
             }
             PROPERTY => match PropertyChange::parse(&m.data) {
-                Some(PropertyChange::Set { object, name, value }) => {
+                Some(c @ PropertyChange::Set { id: Some(id), .. }) => {
+                    fold(&mut out, &mut last_value, id, Change::Property(c));
+                }
+                Some(PropertyChange::Set { id: None, object, name, value }) => {
                     let key = (object, name);
                     match last.get(&key) {
                         Some(&i) => {
-                            out[i] =
-                                Change::Property(PropertyChange::Set { object, name: key.1, value })
+                            out[i] = Change::Property(PropertyChange::Set {
+                                id: None,
+                                object,
+                                name: key.1,
+                                value,
+                            })
                         }
                         None => {
                             out.push(Change::Property(PropertyChange::Set {
+                                id: None,
                                 object,
                                 name: key.1.clone(),
                                 value,
@@ -247,6 +335,7 @@ fn coalesce(msgs: &[RawMessage]) -> Vec<Change> {
                 }
                 Some(c) => {
                     last.clear();
+                    last_value.clear();
                     out.push(Change::Property(c));
                 }
                 None => {}
@@ -255,4 +344,29 @@ fn coalesce(msgs: &[RawMessage]) -> Vec<Change> {
         }
     }
     out
+}
+
+/// `c`, the latest write of property `id`, in the place of its earlier one if any (a
+/// `/world/property` write keeps its form: it may be what declares the id).
+fn fold(out: &mut Vec<Change>, last: &mut HashMap<u32, usize>, id: u32, c: Change) {
+    match last.get(&id) {
+        Some(&i) => {
+            out[i] = match (&out[i], c) {
+                (
+                    Change::Property(PropertyChange::Set { id, object, name, .. }),
+                    Change::Value(_, v),
+                ) => Change::Property(PropertyChange::Set {
+                    id: *id,
+                    object: *object,
+                    name: name.clone(),
+                    value: v,
+                }),
+                (_, c) => c,
+            }
+        }
+        None => {
+            out.push(c);
+            last.insert(id, out.len() - 1);
+        }
+    }
 }

@@ -16,11 +16,13 @@ pub struct World {
     map: HashMap<u64, Guid>,
     /// Recorded objects left out (the recorded display and everything below it).
     skipped: HashSet<u64>,
+    /// The properties `/world/values` entries name, by id: (recorded object, name).
+    ids: HashMap<u32, (u64, PropName)>,
 }
 
 impl World {
     pub fn new(ds: &DataServer) -> World {
-        World { ds: ds.clone(), map: HashMap::new(), skipped: HashSet::new() }
+        World { ds: ds.clone(), map: HashMap::new(), skipped: HashSet::new(), ids: HashMap::new() }
     }
 
     /// This server's object for a recorded GUID.
@@ -59,24 +61,42 @@ impl World {
     /// Applies one `/world/property` change.
     pub fn apply_property(&mut self, c: &PropertyChange) {
         match c {
-            PropertyChange::Created { object, name, value, meta } => {
+            PropertyChange::Created { id, object, name, value, meta } => {
+                let name = PropName::new(name);
+                if let Some(id) = id {
+                    self.ids.insert(*id, (*object, name));
+                }
                 let Some(g) = self.object(*object) else { return };
                 let value = self.map_value(value);
                 let meta = meta.clone().map(replayed_meta).unwrap_or_default();
-                let name = PropName::new(name);
                 if self.ds.create_property(g, name, value.clone(), meta).is_err() {
                     let _ = self.ds.set(g, name, value);
                 }
             }
-            PropertyChange::Set { object, name, value } => {
+            PropertyChange::Set { id, object, name, value } => {
+                let name = PropName::new(name);
+                if let Some(id) = id {
+                    self.ids.insert(*id, (*object, name));
+                }
                 let Some(g) = self.object(*object) else { return };
-                let _ = self.ds.set(g, PropName::new(name), self.map_value(value));
+                let _ = self.ds.set(g, name, self.map_value(value));
             }
-            PropertyChange::Deleted { object, name } => {
+            PropertyChange::Deleted { id, object, name } => {
+                if let Some(id) = id {
+                    self.ids.remove(id);
+                }
                 let Some(g) = self.object(*object) else { return };
                 let _ = self.ds.delete_property(g, PropName::new(name));
             }
         }
+    }
+
+    /// Applies one `/world/values` entry: property `id` takes `value`. An id not declared
+    /// (on `/world/property` or in a keyframe) is skipped.
+    pub fn apply_value(&mut self, id: u32, value: &Value) {
+        let Some(&(object, name)) = self.ids.get(&id) else { return };
+        let Some(g) = self.object(object) else { return };
+        let _ = self.ds.set(g, name, value.clone());
     }
 
     /// Makes the world what the keyframe says: its objects created or updated, its
@@ -90,7 +110,13 @@ impl World {
             }
             self.forget(g);
         }
+        self.ids.clear();
         for o in &s.objects {
+            for ((name, _, _), id) in o.properties.iter().zip(&o.ids) {
+                if let Some(id) = id {
+                    self.ids.insert(*id, (o.guid, PropName::new(name)));
+                }
+            }
             let Some(g) = self.create(o.guid, o.parent, o.index, &o.info) else { continue };
             if self.ds.info(g).is_ok_and(|i| i != o.info) {
                 let _ = self.ds.set_info(g, o.info.clone());

@@ -8,7 +8,11 @@ use mocu_replay::Player;
 use support::{Synthetic, value, write};
 
 const SMALL: Synthetic =
-    Synthetic { seconds: 30, vehicles: 3, props: 4, hz: 10, keyframe_secs: 10 };
+    Synthetic { seconds: 30, vehicles: 3, props: 4, hz: 10, keyframe_secs: 10, batch_steps: 0 };
+
+/// As the recorder writes them: `/world/values` batches of three steps (0.3 s), so that
+/// seeks and reads ahead fall inside batches.
+const BATCHED: Synthetic = Synthetic { batch_steps: 3, ..SMALL };
 
 /// `usv{v}.p{k}` in the replayed world.
 fn prop(p: &Player, v: u64, k: u64) -> Option<f64> {
@@ -26,9 +30,18 @@ fn world(p: &Player) -> Vec<Option<f64>> {
 
 #[test]
 fn seeking_gives_the_world_that_playing_there_gives() {
+    seeking_gives_the_world_that_playing_there_gives_in(SMALL);
+}
+
+#[test]
+fn seeking_gives_the_world_that_playing_there_gives_with_values_in_batches() {
+    seeking_gives_the_world_that_playing_there_gives_in(BATCHED);
+}
+
+fn seeking_gives_the_world_that_playing_there_gives_in(format: Synthetic) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("trial.mcap");
-    write(&path, SMALL);
+    write(&path, format);
     for secs in [0.05, 9.95, 10.0, 12.34, 25.0, 30.0] {
         let mut played = Player::open(&path).unwrap();
         let t = played.at_secs(secs);
@@ -43,9 +56,15 @@ fn seeking_gives_the_world_that_playing_there_gives() {
 
 #[test]
 fn seeking_back_and_forth_ends_where_a_fresh_seek_ends() {
+    for format in [SMALL, BATCHED] {
+        seeking_back_and_forth_ends_where_a_fresh_seek_ends_in(format);
+    }
+}
+
+fn seeking_back_and_forth_ends_where_a_fresh_seek_ends_in(format: Synthetic) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("trial.mcap");
-    write(&path, SMALL);
+    write(&path, format);
     let mut p = Player::open(&path).unwrap();
     for secs in [25.0, 3.0, 28.5, 11.2] {
         let t = p.at_secs(secs);
@@ -61,10 +80,12 @@ fn seeking_back_and_forth_ends_where_a_fresh_seek_ends() {
 fn a_recording_without_keyframes_seeks_by_playing_its_changes() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("trial.mcap");
-    write(&path, Synthetic { keyframe_secs: 0, ..SMALL });
-    let mut p = Player::open(&path).unwrap();
-    p.seek(p.at_secs(21.0)).unwrap();
-    assert_eq!(prop(&p, 1, 2), Some(value(210, 2)));
+    for format in [SMALL, BATCHED] {
+        write(&path, Synthetic { keyframe_secs: 0, ..format });
+        let mut p = Player::open(&path).unwrap();
+        p.seek(p.at_secs(21.0)).unwrap();
+        assert_eq!(prop(&p, 1, 2), Some(value(210, 2)));
+    }
 }
 
 #[test]
