@@ -2,8 +2,9 @@
 
 Run by tests/cli_lsp.rs with MOCU_BIN set to the built `mocu`; each test starts the server
 on a fresh project (a profile, a schema and a layout in a temporary folder) and talks to it
-over stdio as an editor would: open, edit, diagnostics, completion, hover, definition,
-references, rename, symbols, semantic tokens, code actions.
+over stdio as an editor would: open, edit, diagnostics, completion (of `use` paths too),
+hover, definition, references, rename, symbols, semantic tokens, code actions, formatting of
+a document and of a range.
 """
 
 import json
@@ -323,6 +324,36 @@ async def test_formatting_gives_mocu_fmts_canonical_text_and_nothing_once_format
     assert formatted != messy and formatted.startswith("let a = 1\n")
     again = open_layout(client, project / "formatted.mocu", formatted)
     assert list(await format_edits(client, again)) == []
+
+
+async def test_range_formatting_formats_only_the_items_the_range_touches(client: LanguageClient, project):
+    messy = "let   a =    1\nwindow w {layer a   rect 0 0 10 10}\nlet  b  =  a+1\n"
+    uri = open_layout(client, project / "messy.mocu", messy)
+    edits = await client.text_document_range_formatting_async(
+        types.DocumentRangeFormattingParams(
+            text_document=types.TextDocumentIdentifier(uri=uri),
+            range=types.Range(start=types.Position(line=1, character=12), end=types.Position(line=1, character=14)),
+            options=types.FormattingOptions(tab_size=2, insert_spaces=True),
+        )
+    )
+    assert len(edits) == 1
+    e = edits[0]
+    assert (e.range.start, e.range.end) == (types.Position(line=1, character=0), types.Position(line=1, character=35))
+    whole = (await format_edits(client, uri))[0].new_text
+    assert e.new_text.startswith("window w {") and e.new_text in whole
+    assert "layer a   rect" not in e.new_text
+
+
+async def test_completion_inside_a_use_offers_the_folders_layouts_and_the_stdlibs(client: LanguageClient, project):
+    (project / "common.mocu").write_text(COMMON)
+    uri = open_layout(client, project / "paths.mocu", 'use "\nuse "stdlib/\n')
+    top = await completion_labels(client, uri, 0, 5)
+    assert {"common.mocu", "hud.mocu", "stdlib/"} <= set(top) and "paths.mocu" not in top
+    assert top["stdlib/"].kind == types.CompletionItemKind.Folder
+    lib = await completion_labels(client, uri, 1, 12)
+    assert "gauges.mocu" in lib
+    edit = lib["gauges.mocu"].text_edit
+    assert (edit.range.start.character, edit.range.end.character) == (12, 12)
 
 
 async def test_formatting_leaves_a_file_with_syntax_errors_alone(client: LanguageClient, project):

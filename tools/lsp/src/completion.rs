@@ -6,6 +6,7 @@
 use crate::check::Analysis;
 use crate::hover::component_doc;
 use crate::index::{Index, Kind};
+use crate::live::LiveTree;
 use crate::paths::{self, MemberKind};
 use lsp_types::{CompletionItem, CompletionItemKind, Documentation, MarkupContent, MarkupKind};
 use mocu_language::ast::Item;
@@ -64,6 +65,7 @@ pub const KEYWORDS: &[&str] = &[
 pub fn complete(
     index: &Index,
     analysis: Option<&Analysis>,
+    live: &dyn LiveTree,
     path: &str,
     offset: usize,
 ) -> Vec<CompletionItem> {
@@ -85,7 +87,7 @@ pub fn complete(
         if segs.first().map(String::as_str) != Some("root") {
             return Vec::new();
         }
-        return paths::members(&a.schema, &segs[1..])
+        return crate::live::merge(live, &segs[1..], paths::members(&a.schema, &segs[1..]))
             .into_iter()
             .map(|m| CompletionItem {
                 label: m.name,

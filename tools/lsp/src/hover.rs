@@ -2,11 +2,12 @@
 //! them), a parameter's type, default and meaning, a `let`'s checked type, and what the
 //! project's schemas say of a world-model path (type, units, range, description).
 //!
-//! No live values: no running OCU is reachable from the editor yet (there is no distributed
-//! world model to ask), so hover shows what the schemas declare.
+//! A world-model path's current value comes from the server's [`LiveTree`] (none until the
+//! distributed world model, issue #17, gives one: then hover shows what the schemas declare).
 
 use crate::check::Analysis;
 use crate::index::{Def, Index, Kind};
+use crate::live::LiveTree;
 use crate::paths;
 use mocu_language::{builtins, docgen};
 
@@ -14,6 +15,7 @@ use mocu_language::{builtins, docgen};
 pub fn hover(
     index: &Index,
     analysis: Option<&Analysis>,
+    live: &dyn LiveTree,
     path: &str,
     offset: usize,
 ) -> Option<String> {
@@ -24,7 +26,7 @@ pub fn hover(
         let mut s = describe_def(index, analysis, def);
         if def.kind == Kind::Let
             && let Some(a) = analysis
-            && let Some(p) = path_info(index, a, text, offset)
+            && let Some(p) = path_info(index, a, live, text, offset)
         {
             s.push_str(&format!("\n\n{p}"));
         }
@@ -43,17 +45,27 @@ pub fn hover(
     {
         return Some(format!("`{}`: built-in function. {}", f.name, f.doc));
     }
-    path_info(index, analysis?, text, offset)
+    path_info(index, analysis?, live, text, offset)
 }
 
 /// What the schema says of the path under the cursor, when it reaches `root`.
-fn path_info(index: &Index, analysis: &Analysis, text: &str, offset: usize) -> Option<String> {
+fn path_info(
+    index: &Index,
+    analysis: &Analysis,
+    live: &dyn LiveTree,
+    text: &str,
+    offset: usize,
+) -> Option<String> {
     let (_, segs) = paths::dotted_at(text, offset)?;
     let segs = paths::expand(index, segs);
     if segs.first().map(String::as_str) != Some("root") || segs.len() < 2 {
         return None;
     }
-    paths::describe(&analysis.schema, &segs[1..])
+    let declared = paths::describe(&analysis.schema, &segs[1..]);
+    match (declared, crate::live::value_line(live, &segs[1..])) {
+        (Some(d), Some(now)) => Some(format!("{d}\n\n{now}")),
+        (d, now) => d.or(now),
+    }
 }
 
 fn describe_def(index: &Index, analysis: Option<&Analysis>, def: &Def) -> String {

@@ -11,6 +11,7 @@ pub mod check;
 pub mod completion;
 pub mod hover;
 pub mod index;
+pub mod live;
 pub mod overlay;
 pub mod paths;
 pub mod schedule;
@@ -81,11 +82,26 @@ pub fn capabilities() -> ServerCapabilities {
 
 /// Runs the server on a connection (stdio, or in memory for tests) until `exit`.
 pub fn serve(connection: Connection) -> Result<(), String> {
-    serve_with(connection, schedule::Timing::default())
+    serve_with(connection, Options::default())
 }
 
-/// [`serve`], edits waiting `timing` before they are checked.
-pub fn serve_with(connection: Connection, timing: schedule::Timing) -> Result<(), String> {
+/// How a server is set up.
+pub struct Options {
+    /// How long edits wait before they are checked.
+    pub timing: schedule::Timing,
+    /// Where live world values come from (none yet: pending issue #17).
+    pub live: Box<dyn live::LiveTree>,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options { timing: schedule::Timing::default(), live: Box::new(live::NoLiveTree) }
+    }
+}
+
+/// [`serve`] with `options`.
+pub fn serve_with(connection: Connection, options: Options) -> Result<(), String> {
+    let Options { timing, live } = options;
     let caps = serde_json::to_value(capabilities()).map_err(|e| e.to_string())?;
     connection.initialize(caps).map_err(|e| e.to_string())?;
     let (jobs, rx) = crossbeam_channel::unbounded();
@@ -97,6 +113,7 @@ pub fn serve_with(connection: Connection, timing: schedule::Timing) -> Result<()
         generation: 0,
         indexes: HashMap::new(),
         cache: ItemCache::new(),
+        live,
         jobs,
         analyses,
     };
@@ -127,6 +144,8 @@ struct Server {
     indexes: HashMap<String, (u64, std::rc::Rc<Index>)>,
     /// The trees of the indexes' files, for the next index.
     cache: ItemCache,
+    /// A running OCU's world model, for hover and completion.
+    live: Box<dyn live::LiveTree>,
     jobs: Sender<Work>,
     analyses: Analyses,
 }
@@ -262,13 +281,15 @@ impl Server {
                     return Ok(serde_json::Value::Null);
                 };
                 let analysis = self.analysis(&path);
-                let h = hover::hover(&ix, analysis.as_deref(), &path, off).map(|value| Hover {
-                    contents: HoverContents::Markup(MarkupContent {
-                        kind: MarkupKind::Markdown,
-                        value,
-                    }),
-                    range: None,
-                });
+                let h = hover::hover(&ix, analysis.as_deref(), self.live.as_ref(), &path, off).map(
+                    |value| Hover {
+                        contents: HoverContents::Markup(MarkupContent {
+                            kind: MarkupKind::Markdown,
+                            value,
+                        }),
+                        range: None,
+                    },
+                );
                 Ok(json(&h))
             }
             Completion::METHOD => {
@@ -277,7 +298,8 @@ impl Server {
                     return Ok(serde_json::Value::Null);
                 };
                 let analysis = self.analysis(&path);
-                let items = completion::complete(&ix, analysis.as_deref(), &path, off);
+                let items =
+                    completion::complete(&ix, analysis.as_deref(), self.live.as_ref(), &path, off);
                 Ok(json(&CompletionResponse::Array(items)))
             }
             GotoDefinition::METHOD => {

@@ -113,7 +113,7 @@ pub struct Member {
     pub detail: String,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MemberKind {
     Object,
     Property,
