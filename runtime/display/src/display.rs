@@ -171,6 +171,7 @@ pub struct Display {
     clock: Clock,
     rate: f64,
     first: bool,
+    touch: crate::touch::Touch,
 }
 
 impl Display {
@@ -216,6 +217,7 @@ impl Display {
             clock: options.clock,
             rate: options.rate,
             first: true,
+            touch: crate::touch::Touch::default(),
         })
     }
 
@@ -334,6 +336,39 @@ impl Display {
     /// Routes pointer input to the window under it (or holding the capture).
     pub fn pointer(&mut self, x: f32, y: f32, ev: PointerEvent) -> Option<Hit> {
         self.wm.pointer(x, y, ev)
+    }
+
+    /// Routes touch input as pointer input (`touch.rs`: a tap is a left click, a drag a left
+    /// drag, a long press a right click), on the display's clock. Returns the pointer input
+    /// it made, for the same mouse bindings as the mouse's.
+    pub fn touch(
+        &mut self,
+        id: u64,
+        phase: crate::touch::TouchPhase,
+        x: f32,
+        y: f32,
+    ) -> Vec<crate::touch::PointerInput> {
+        let now = self.clock.now();
+        let made = self.touch.event(id, phase, x, y, now);
+        for &(x, y, ev) in &made {
+            self.wm.pointer(x, y, ev);
+        }
+        made
+    }
+
+    /// A finger held still past its time becomes a long press (a right click); call at
+    /// [`Display::touch_deadline`].
+    pub fn touch_tick(&mut self) -> Vec<crate::touch::PointerInput> {
+        let made = self.touch.tick(self.clock.now());
+        for &(x, y, ev) in &made {
+            self.wm.pointer(x, y, ev);
+        }
+        made
+    }
+
+    /// When a finger held still becomes a long press, if one is down.
+    pub fn touch_deadline(&self) -> Option<Instant> {
+        self.touch.deadline()
     }
 
     /// Marks every layer for a full repaint at the next frame (a backend change, a

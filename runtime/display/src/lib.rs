@@ -30,6 +30,7 @@ mod present;
 mod skia;
 mod text;
 mod tiles;
+pub mod touch;
 #[cfg(feature = "gpu")]
 mod window;
 mod wm;

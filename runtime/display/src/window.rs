@@ -12,7 +12,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use winit::application::ApplicationHandler;
-use winit::event::{ElementState, MouseButton, MouseScrollDelta, StartCause, WindowEvent};
+use winit::event::{
+    ElementState, MouseButton, MouseScrollDelta, StartCause, TouchPhase, WindowEvent,
+};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
 use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
@@ -250,6 +252,17 @@ impl ApplicationHandler<Wake> for App<'_> {
         } else {
             el.set_control_flow(ControlFlow::Wait);
         }
+        // A finger held still becomes a long press at its deadline: wake for it.
+        if let Some(display) = &mut self.display {
+            forward_pointer(&self.ds, &display.touch_tick());
+            if let Some(due) = display.touch_deadline() {
+                let due = match el.control_flow() {
+                    ControlFlow::WaitUntil(t) => t.min(due),
+                    _ => due,
+                };
+                el.set_control_flow(ControlFlow::WaitUntil(due));
+            }
+        }
     }
 
     fn user_event(&mut self, el: &ActiveEventLoop, wake: Wake) {
@@ -315,6 +328,20 @@ impl ApplicationHandler<Wake> for App<'_> {
                     ElementState::Released => PointerEvent::Up(b),
                 };
                 display.pointer(self.cursor.0, self.cursor.1, ev);
+            }
+            // One finger is the mouse (`touch.rs`): the same routing, the same bindings.
+            WindowEvent::Touch(t) => {
+                let phase = match t.phase {
+                    TouchPhase::Started => crate::touch::TouchPhase::Started,
+                    TouchPhase::Moved => crate::touch::TouchPhase::Moved,
+                    TouchPhase::Ended => crate::touch::TouchPhase::Ended,
+                    TouchPhase::Cancelled => crate::touch::TouchPhase::Cancelled,
+                };
+                let (x, y) = (t.location.x as f32, t.location.y as f32);
+                forward_pointer(&self.ds, &display.touch(t.id, phase, x, y));
+                if let Some(due) = display.touch_deadline() {
+                    el.set_control_flow(ControlFlow::WaitUntil(due));
+                }
             }
             _ => {}
         }
@@ -389,6 +416,20 @@ fn open_compositor(
 
 /// Hands a key, mouse button or wheel to the input module through
 /// `root.operator.inputs.<device>.<method>(name, value)`; nothing happens without one.
+/// The mouse buttons of pointer input made from touch, to the `bind mouse` bindings (as a
+/// mouse's buttons go).
+fn forward_pointer(ds: &DataServer, made: &[crate::touch::PointerInput]) {
+    for (_, _, ev) in made {
+        let (b, down) = match ev {
+            PointerEvent::Down(b) => (*b, true),
+            PointerEvent::Up(b) => (*b, false),
+            _ => continue,
+        };
+        let name = ["left", "right", "middle"].get(b as usize).copied().unwrap_or("left");
+        forward_input(ds, "mouse", "button", name.into(), Value::Bool(down));
+    }
+}
+
 fn forward_input(ds: &DataServer, device: &str, method: &str, name: String, value: Value) {
     if let Some(g) = ds.resolve(&["operator", "inputs", device]) {
         ds.call(g, method, vec![Value::str(&name), value], None, |_| {});

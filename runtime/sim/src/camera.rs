@@ -3,9 +3,9 @@
 //! so that the picture moves with the vehicle (the horizon tilts with roll and rises and
 //! falls with pitch, the skyline slides with heading) and a drive/payload swap is visible.
 //!
-//! A drive camera is wide (60°) and in colour, with a heading tape along its top; a payload
+//! A drive camera is wide (60°) and in colour, with a heading scale along its horizon; a payload
 //! camera is narrow (20°, a zoom), monochrome (an EO sensor), pointed by its own pan and tilt,
-//! with a pan/tilt indicator in its bottom-right corner and a fine cross in its middle.
+//! with a pan/tilt indicator near its bottom and a fine cross in its middle.
 //!
 //! Cost: everything that does not depend on the pose (the sky and ground shades by distance
 //! from the horizon, the ground texture, the skyline by azimuth) is drawn once per renderer;
@@ -17,7 +17,7 @@ use crate::vehicle::VehicleKind;
 /// Which camera of a vehicle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Lens {
-    /// Forward, fixed to the vehicle, wide, in colour, with a heading tape.
+    /// Forward, fixed to the vehicle, wide, in colour, with a heading scale.
     Drive,
     /// On a pan/tilt head, narrow, monochrome.
     Payload,
@@ -136,7 +136,7 @@ impl Renderer {
         }
         self.draw_skyline(&mut px, look, mid, slope);
         match self.lens {
-            Lens::Drive => self.draw_tape(&mut px, look),
+            Lens::Drive => self.draw_tape(&mut px, look, mid, slope),
             Lens::Payload => self.draw_head(&mut px, pose.pan, pose.tilt),
         }
         px
@@ -163,46 +163,36 @@ impl Renderer {
         }
     }
 
-    /// The heading tape of a drive camera: a dark band along the top, a tick every 10°,
-    /// the heading every 30° in digits, north in red, the lubber line in the middle.
-    fn draw_tape(&self, px: &mut [u8], look: f64) {
+    /// The heading scale of a drive camera, along the horizon (it tilts and rises with it,
+    /// as an EO sight's does): a tick every 10° standing on the horizon, the heading every
+    /// 30° in digits above it, north in red.
+    fn draw_tape(&self, px: &mut [u8], look: f64, mid: f64, slope: f64) {
         let (w, h) = (self.w, self.h);
-        let unit = (h / 160).max(1);
-        let band = 14 * unit;
-        if band * 2 > h {
-            return;
-        }
-        for y in 0..band {
-            for p in px[y * w * 3..(y + 1) * w * 3].chunks_exact_mut(3) {
-                for c in p {
-                    *c = (*c as u16 * 2 / 7) as u8;
-                }
-            }
-        }
+        let unit = (h / 240).max(1);
         let fov = self.lens.fov();
         let first = ((look - fov / 2.0) / 10.0).ceil() as i64;
         let last = ((look + fov / 2.0) / 10.0).floor() as i64;
         for k in first..=last {
             let deg = (k * 10).rem_euclid(360);
             let x = ((k as f64 * 10.0 - look) / fov + 0.5) * w as f64;
+            let base = (mid + slope * (x - w as f64 / 2.0)).round() as i64;
             let x = x.round() as i64;
             let major = deg % 30 == 0;
-            let colour = if deg == 0 { [239, 68, 68] } else { [232, 240, 248] };
-            let len = if major { 5 * unit } else { 3 * unit };
-            fill(px, w, h, x - unit as i64 / 2, (band - len) as i64, unit, len, colour);
+            let colour = if deg == 0 { [239, 68, 68] } else { [240, 244, 248] };
+            let len = if major { 8 * unit } else { 4 * unit };
+            fill(px, w, h, x - unit as i64 / 2, base - len as i64, unit, len, colour);
             if major {
                 let text = format!("{:03}", deg);
                 let tw = (text.len() * 4 - 1) * unit;
-                digits(px, w, h, x - tw as i64 / 2, unit as i64 * 2, unit, &text, colour);
+                let y = base - (len + 7 * unit) as i64;
+                digits(px, w, h, x - tw as i64 / 2, y, unit, &text, colour);
             }
         }
-        // The lubber line: where the camera points.
-        let c = (w / 2) as i64;
-        fill(px, w, h, c - unit as i64, band as i64, 2 * unit, 4 * unit, [250, 204, 21]);
     }
 
-    /// The pan/tilt head's indicator (a box in the bottom-right corner with a dot where the
-    /// head points: pan ±180° across, tilt -90..+30° down it) and a fine cross in the middle.
+    /// The pan/tilt head's indicator (a box at the bottom, an eighth of the height up, with a
+    /// dot where the head points: pan ±180° across, tilt -90..+30° down it) and a fine cross
+    /// in the middle.
     fn draw_head(&self, px: &mut [u8], pan: f64, tilt: f64) {
         let (w, h) = (self.w, self.h);
         let unit = (h / 160).max(1);
@@ -210,7 +200,7 @@ impl Renderer {
         if bw * 3 > w || bh * 3 > h {
             return;
         }
-        let (x0, y0) = ((w - bw - 4 * unit) as i64, (h - bh - 4 * unit) as i64);
+        let (x0, y0) = (((w - bw) / 2) as i64, (h - bh - h * 2 / 15) as i64);
         let frame = [210, 210, 210];
         fill(px, w, h, x0, y0, bw, unit, frame);
         fill(px, w, h, x0, y0 + (bh - unit) as i64, bw, unit, frame);
@@ -357,9 +347,9 @@ mod tests {
     }
 
     /// The first row, from the top, at column `x` that is not sky blue-ish (the horizon or
-    /// the skyline), below the heading tape.
+    /// the skyline).
     fn horizon(px: &[u8], w: usize, h: usize, x: usize) -> usize {
-        (h / 8..h).find(|&y| at(px, w, x, y)[2] < 150).unwrap_or(h)
+        (h / 4..h).find(|&y| at(px, w, x, y)[2] < 150).unwrap_or(h)
     }
 
     #[test]
@@ -377,7 +367,7 @@ mod tests {
     }
 
     #[test]
-    fn the_skyline_slides_with_heading_and_the_tape_shows_it() {
+    fn the_skyline_slides_with_heading_and_the_heading_scale_stands_on_the_horizon() {
         let r = Renderer::new(320, 240, Lens::Drive, VehicleKind::Usv);
         let a = r.render(Pose { heading: 60.0, ..Pose::default() });
         let b = r.render(Pose { heading: 70.0, ..Pose::default() });
@@ -386,9 +376,9 @@ mod tests {
         assert!(horizon(&a, 320, 240, 160) < 117, "the headland stands above the horizon");
         let open = r.render(Pose { heading: 175.0, ..Pose::default() });
         assert!(horizon(&open, 320, 240, 160) >= 118, "open sea at 175°");
-        // The tape's band is dark, the picture below it is not.
-        let mean = |y: usize| (0..320).map(|x| at(&a, 320, x, y)[2] as u32).sum::<u32>() / 320;
-        assert!(mean(1) < 80 && mean(60) > 120, "{} {}", mean(1), mean(60));
+        // The heading scale: north's tick, in red, stands on the horizon in the middle at 0°.
+        let north = r.render(Pose { heading: 0.0, ..Pose::default() });
+        assert_eq!(at(&north, 320, 160, 117), [239, 68, 68]);
     }
 
     #[test]

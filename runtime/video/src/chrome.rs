@@ -59,22 +59,22 @@ impl Chrome {
         }
     }
 
-    /// The border, the title in the top-left corner and, for a live stream, its frame rate
-    /// and latency (where the stream says when its frames arrived) in the top-right corner.
+    /// The border and, in the bottom-left corner (clear of the HUD's usual top band and of
+    /// the picture's own marks), the title and, for a live stream, its frame rate and latency
+    /// (where the stream says when its frames arrived): "DRIVE · usv1  10 fps · 38 ms".
     pub(crate) fn draw(&self, c: &mut dyn Canvas, r: Rect, stats: Option<(f64, Option<f64>)>) {
         let size = text_size(r);
-        let style = TextStyle::new(size, TEXT).bold().baseline(Baseline::Middle);
         let pad = (size * 0.4).round();
-        let title = self.title();
-        plate(c, &title, Point::new(r.x + pad, r.y + pad), &style, false);
+        let mut text = self.title();
         if let Some((fps, latency)) = stats {
-            let text = match latency {
-                Some(ms) => format!("{fps:.0} fps · {ms:.0} ms"),
-                None => format!("{fps:.0} fps"),
+            text += &match latency {
+                Some(ms) => format!("   {fps:.0} fps · {ms:.0} ms"),
+                None => format!("   {fps:.0} fps"),
             };
-            let style = TextStyle::new(size, TEXT).baseline(Baseline::Middle);
-            plate(c, &text, Point::new(r.x + r.w - pad, r.y + pad), &style, true);
         }
+        let style = TextStyle::new(size, TEXT).bold().baseline(Baseline::Middle);
+        let bottom = r.y + r.h - pad - plate_height(size);
+        plate(c, &text, Point::new(r.x + pad, bottom), &style, false);
         let b = 1.0f32.max((r.h / 360.0).round());
         c.stroke_rounded_rect(
             Rect::new(r.x + b / 2.0, r.y + b / 2.0, r.w - b, r.h - b),
@@ -102,24 +102,29 @@ fn text_size(r: Rect) -> f32 {
     (r.h / 30.0).clamp(12.0, 18.0).round()
 }
 
+fn plate_height(size: f32) -> f32 {
+    (size * 1.5).round()
+}
+
 /// Text on a dark plate whose top-left (or top-right, `right`) corner is `at`.
 fn plate(c: &mut dyn Canvas, text: &str, at: Point, style: &TextStyle, right: bool) {
     let m = c.measure_text(text, style);
     let pad = (style.size * 0.35).round();
-    let (w, h) = (m.width + 2.0 * pad, (style.size * 1.5).round());
+    let (w, h) = (m.width + 2.0 * pad, plate_height(style.size));
     let x = if right { at.x - w } else { at.x };
     c.fill_rounded_rect(Rect::new(x, at.y, w, h), 3.0, &Brush::Solid(PLATE));
     c.draw_text(text, Point::new(x + pad, at.y + h / 2.0), style);
 }
 
-/// A label under the title: `STALE`.
+/// A label above the title: `STALE`.
 pub(crate) fn badge(c: &mut dyn Canvas, r: Rect, text: &str, color: Color) {
     let size = text_size(r);
     let style = TextStyle::new(size, Color::rgb(0x10, 0x10, 0x10)).bold().baseline(Baseline::Top);
     let m = c.measure_text(text, &style);
     let pad = (size * 0.4).round();
-    let top = r.y + pad + (size * 1.5).round() + pad;
-    let bg = Rect::new(r.x + pad, top, m.width + 2.0 * pad, size * 1.3 + pad);
+    let (bw, bh) = (m.width + 2.0 * pad, size * 1.3 + pad);
+    let top = r.y + r.h - 2.0 * pad - plate_height(size) - bh;
+    let bg = Rect::new(r.x + pad, top, bw, bh);
     c.fill_rounded_rect(bg, 3.0, &Brush::Solid(color));
     c.draw_text(text, Point::new(bg.x + pad, bg.y + pad * 0.6), &style);
 }
