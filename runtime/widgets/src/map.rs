@@ -65,6 +65,7 @@ struct State {
     /// `root.map.features`: the chart is drawn again when its features come or go.
     features_watch: Option<PathWatch>,
     features_sub: Option<SubscriptionId>,
+    features: chart::FeatureCache,
 }
 
 impl MapModule {
@@ -388,7 +389,7 @@ impl Shared {
         c.fill_rounded_rect(whole, 6.0 * u, &Brush::Solid(chart::WATER));
         let origin = self.origin();
         let vehicles = self.vehicles(origin);
-        let features = chart::features(&self.ds);
+        let features = self.state.lock().features.get(&self.ds);
         let view = self.view(g, size.w, size.h, u, &vehicles, &features, origin);
         self.state.lock().views.insert(g, view);
         c.save();
@@ -455,7 +456,7 @@ impl Shared {
             let colour = if v.stale { symbols::STALE } else { symbols::TEXT };
             symbols::label(c, &mut labels, &v.name, at[i], 18.0 * u, (13.0 * u, colour), u);
         }
-        for f in &features {
+        for f in features.iter() {
             if let Some(p) = chart::label_anchor(&view, f) {
                 let colour = match f.kind.as_str() {
                     "nogo" => chart::NOGO,

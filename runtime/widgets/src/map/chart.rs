@@ -13,6 +13,32 @@ pub struct ChartFeature {
     pub shape: String,
     pub parts: Vec<Vec<(f64, f64)>>,
     pub colour: String,
+    /// West, south, east, north bounds in degrees: what the view leaves out is not drawn.
+    pub bounds: (f64, f64, f64, f64),
+}
+
+/// The features as last read, kept while `root.map.features` has the same children, each
+/// read whole (a feature is published before its properties: one read without its parts
+/// is read again).
+#[derive(Default)]
+pub struct FeatureCache {
+    children: Vec<Guid>,
+    complete: bool,
+    features: std::sync::Arc<Vec<ChartFeature>>,
+}
+
+impl FeatureCache {
+    pub fn get(&mut self, ds: &DataServer) -> std::sync::Arc<Vec<ChartFeature>> {
+        let children =
+            ds.resolve(&["map", "features"]).and_then(|f| ds.children(f).ok()).unwrap_or_default();
+        if !(self.complete && children == self.children) {
+            let features = features(ds);
+            self.complete = features.len() == children.len();
+            self.children = children;
+            self.features = std::sync::Arc::new(features);
+        }
+        self.features.clone()
+    }
 }
 
 /// Deep water where there are no tiles.
@@ -33,7 +59,7 @@ pub fn features(ds: &DataServer) -> Vec<ChartFeature> {
     };
     let mut out = Vec::new();
     for g in ds.children(folder).unwrap_or_default() {
-        let parts = match ds.try_get(g, PropName::new("parts")) {
+        let parts: Vec<Vec<(f64, f64)>> = match ds.try_get(g, PropName::new("parts")) {
             Some(Value::List(ps)) => ps
                 .iter()
                 .map(|p| match p {
@@ -46,7 +72,13 @@ pub fn features(ds: &DataServer) -> Vec<ChartFeature> {
                 .collect(),
             _ => continue,
         };
+        let mut bounds = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+        for (lon, lat) in parts.iter().flatten() {
+            bounds =
+                (bounds.0.min(*lon), bounds.1.min(*lat), bounds.2.max(*lon), bounds.3.max(*lat));
+        }
         out.push(ChartFeature {
+            bounds,
             kind: text(g, "kind"),
             name: text(g, "name"),
             shape: text(g, "shape"),
@@ -104,8 +136,19 @@ pub fn buoy_colour(name: &str) -> Color {
     }
 }
 
-/// Draws the features in chart order: areas under lines, lines under marks.
+/// Whether any of a feature can be on the screen (with room for strokes and marks).
+fn on_screen(view: &View, f: &ChartFeature) -> bool {
+    let (w, s, e, n) = f.bounds;
+    let (a, b) = (view.to_screen(n, w), view.to_screen(s, e));
+    let m = 20.0;
+    a.x <= view.w + m && b.x >= -m && a.y <= view.h + m && b.y >= -m
+}
+
+/// Draws the features in chart order: areas under lines, lines under marks; those wholly
+/// outside the view are left out.
 pub fn draw(c: &mut dyn Canvas, view: &View, features: &[ChartFeature], u: f32) {
+    let visible: Vec<&ChartFeature> = features.iter().filter(|f| on_screen(view, f)).collect();
+    let features = &visible[..];
     let dash = [6.0 * u, 4.0 * u];
     // Zones and no-go areas: a tint under everything.
     for f in features.iter().filter(|f| f.shape == "polygon") {
