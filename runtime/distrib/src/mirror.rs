@@ -53,6 +53,8 @@ struct Site {
     generation: u64,
     pending: u32,
     objects: HashMap<Vec<String>, Mirrored>,
+    /// The site's GUIDs of the objects mirrored here: a `guid` value is translated.
+    guids: HashMap<u64, Guid>,
     confirmed: Option<HashSet<Vec<String>>>,
 }
 
@@ -143,6 +145,7 @@ impl Mirror {
                 let Some(local) = self.ensure(&site, &path, None) else { return Ok(()) };
                 if put {
                     let (v, meta) = payload::property_from(bytes)?;
+                    let v = self.local_value(&site, v);
                     self.write(local, &name, v, meta);
                 } else {
                     let _ = self.ds.delete_property(local, name.as_str());
@@ -177,6 +180,7 @@ impl Mirror {
                 return self.ensure(site, path, rec);
             }
             if let Some(rec) = rec {
+                s.guids.insert(rec.guid, local);
                 if owned && self.ds.info(local).ok().as_ref() != Some(&rec.info) {
                     let _ = self.ds.set_info(local, rec.info.clone());
                 }
@@ -199,6 +203,9 @@ impl Mirror {
         };
         let s = self.sites.entry(site.to_string()).or_default();
         s.objects.insert(path.to_vec(), Mirrored { local, owned });
+        if let Some(rec) = rec {
+            s.guids.insert(rec.guid, local);
+        }
         if let Some(rec) = rec {
             self.proxy_methods(site, path, local, rec);
         }
@@ -223,6 +230,21 @@ impl Mirror {
                 });
             });
         }
+    }
+
+    /// `v` with the site's GUIDs of mirrored objects replaced by the local ones (a GUID of
+    /// an object not mirrored here stays the site's number).
+    fn local_value(&self, site: &str, v: Value) -> Value {
+        let Some(s) = self.sites.get(site) else { return v };
+        fn tr(s: &Site, v: Value) -> Value {
+            match v {
+                Value::Guid(g) => Value::Guid(s.guids.get(&g.get()).copied().unwrap_or(g)),
+                Value::List(xs) => Value::list(xs.iter().cloned().map(|x| tr(s, x))),
+                Value::Set(xs) => Value::set(xs.iter().cloned().map(|x| tr(s, x))),
+                other => other,
+            }
+        }
+        tr(s, v)
     }
 
     fn write(&self, local: Guid, name: &str, v: Value, meta: Option<PropMeta>) {
@@ -285,25 +307,29 @@ impl Mirror {
         s.confirmed = Some(HashSet::new());
         let generation = s.generation;
         self.peer_status(site, true);
-        for what in ["obj", "prop"] {
-            let tx = self.tx.clone();
-            let done = Done { tx: tx.clone(), site: site.to_string(), generation };
-            let _ = self
-                .session
-                .get(keys::state_of(Some(site), what))
-                .consolidation(ConsolidationMode::None)
-                .callback(move |reply| {
-                    let _keep = &done;
-                    if let Ok(s) = reply.result() {
-                        let _ = tx.send(Inbound::Sample {
-                            key: s.key_expr().as_str().to_string(),
-                            put: s.kind() == zenoh::sample::SampleKind::Put,
-                            bytes: s.payload().to_bytes().into_owned(),
-                        });
-                    }
-                })
-                .wait();
-        }
+        self.ask_snapshot(site, "obj", generation);
+    }
+
+    /// Asks `site` for its objects (`obj`) or properties (`prop`): the properties only when
+    /// the objects are in, so that a `guid` value finds the object it names.
+    fn ask_snapshot(&self, site: &str, what: &str, generation: u64) {
+        let tx = self.tx.clone();
+        let done = Done { tx: tx.clone(), site: site.to_string(), generation };
+        let _ = self
+            .session
+            .get(keys::state_of(Some(site), what))
+            .consolidation(ConsolidationMode::None)
+            .callback(move |reply| {
+                let _keep = &done;
+                if let Ok(s) = reply.result() {
+                    let _ = tx.send(Inbound::Sample {
+                        key: s.key_expr().as_str().to_string(),
+                        put: s.kind() == zenoh::sample::SampleKind::Put,
+                        bytes: s.payload().to_bytes().into_owned(),
+                    });
+                }
+            })
+            .wait();
     }
 
     fn site_down(&mut self, site: &str) {
@@ -336,6 +362,7 @@ impl Mirror {
         }
         s.pending -= 1;
         if s.pending > 0 {
+            self.ask_snapshot(site, "prop", generation);
             return;
         }
         if let Some(seen) = s.confirmed.take() {

@@ -50,6 +50,7 @@ fn publish_vehicle(ds: &DataServer, name: &str) -> (mocu_dataserver::Guid, mocu_
     ds.create_property(nav, "speed", Value::Float(1.5), speed).unwrap();
     ds.set(v, "stale", Value::Bool(false)).unwrap();
     ds.set(v, "armed", Value::Bool(false)).unwrap();
+    ds.set(v, "nav_object", Value::Guid(nav)).unwrap();
     let spec = MethodSpec::new("arm").param(ParamSpec::new("on", ValueKind::Bool));
     let d2 = ds.clone();
     ds.publish_method_fn(v, spec, move |args| match args.first() {
@@ -119,6 +120,9 @@ fn a_joiner_mirrors_objects_properties_metadata_and_methods_and_calls_come_back_
         (m.kind, m.units.as_deref(), m.range, m.rate_hz),
         (Some(ValueKind::Float), Some("m/s"), Some((0.0, 20.0)), None)
     );
+
+    // A GUID value names the mirror's own object.
+    assert_eq!(b.get(bv, "nav_object").unwrap(), Value::Guid(bnav));
 
     // Updates, in order.
     for x in [2.0, 3.0, 4.5] {
