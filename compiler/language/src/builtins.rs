@@ -182,6 +182,12 @@ pub const NATIVES: &[NativeDef] = &[
         doc: "the discovered vehicles",
     },
     NativeDef {
+        name: "BindingLegend",
+        params: &[("device", "string", true)],
+        events: &[],
+        doc: "the layout's input bindings in use and what each does (from its `bind` blocks)",
+    },
+    NativeDef {
         name: "AlertLayer",
         params: &[],
         events: &[],

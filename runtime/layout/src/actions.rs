@@ -526,7 +526,8 @@ pub(crate) fn button_key(device: &str, kind: &str, input: &str, event: &str) -> 
 
 /// Publishes the layout's input bindings as objects `root.display.bindings.b1…bN` (type
 /// `binding`): `device`, `kind`, `input`, `event`, `hold_ms`, `mode`, `shift`,
-/// `shift_input`, `deadzone`, `expo`, `scale`, `invert`, `rate`, then a method
+/// `shift_input`, `deadzone`, `expo`, `scale`, `invert`, `rate`, `action` (what it does, in
+/// a few words: `legend.rs`), then a method
 /// `fire(value)` that runs the actions with `axis`/`delta` bound to the value, then
 /// `ready = true`. When all are there, `revision` of `root.display.bindings` goes up: the
 /// input module (or any other) rescans. The first mode declared becomes
@@ -560,6 +561,7 @@ pub(crate) fn publish_bindings(sh: &Arc<Shared>, st: &mut State) {
         let _ = ds.set(b, "scale", Value::Float(spec.shaping.scale));
         let _ = ds.set(b, "invert", Value::Bool(spec.shaping.invert));
         let _ = ds.set(b, "rate", Value::Float(spec.shaping.rate));
+        let _ = ds.set(b, "action", text(&crate::legend::describe(acts)));
         if first_mode.is_none() {
             first_mode = spec.mode.clone();
         }

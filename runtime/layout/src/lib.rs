@@ -24,6 +24,7 @@ mod alerts;
 mod clock;
 pub mod events;
 pub mod graph;
+mod legend;
 pub use mocu_lower as lower;
 use mocu_lower::convert;
 mod menu;

@@ -38,6 +38,16 @@ pub fn draw_native(
         vehicle_list(c, ds, filter, b);
         return;
     }
+    if component == "BindingLegend" {
+        // It grows with a design's scale, as the vehicle list does (`paint.rs`).
+        let s = props.get("scale").and_then(Value::as_f64).unwrap_or(1.0).max(0.1) as f32;
+        let device = props.get("device").and_then(Value::as_str).unwrap_or("gamepad");
+        c.save();
+        c.scale(s, s);
+        binding_legend(c, ds, device, Rect::new(0.0, 0.0, b.w / s, b.h / s));
+        c.restore();
+        return;
+    }
     let label = match component {
         "Video" => format!("no video from {}", camera_name(props.get("source"))),
         other => other.to_string(),
@@ -212,4 +222,51 @@ fn vehicle_list(c: &mut dyn Canvas, ds: &DataServer, filter: Option<&str>, b: Re
             x = bx + bar_w + 10.0;
         }
     }
+}
+
+/// The bindings in use on `device` (the layout publishes them under `root.display.bindings`,
+/// each with its `action` described): one row per input, the input then what it does; in a
+/// mode, that mode's bindings and those of every mode.
+fn binding_legend(c: &mut dyn Canvas, ds: &DataServer, device: &str, b: Rect) {
+    let head = TextStyle::new(12.0, theme::DIM).baseline(Baseline::Middle).bold();
+    c.draw_text(&device.to_uppercase(), Point::new(10.0, 13.0), &head);
+    c.line(Point::new(6.0, 25.0), Point::new(b.w - 6.0, 25.0), 1.0, theme::FRAME);
+    let rows = legend_rows(ds, device);
+    let fit = (((b.h - LIST_TOP) / 20.0).floor().max(0.0)) as usize;
+    let key = TextStyle::new(12.0, theme::ACCENT).baseline(Baseline::Middle).bold();
+    let what = TextStyle::new(12.0, theme::TEXT).baseline(Baseline::Middle);
+    let col = (b.w * 0.36).clamp(70.0, 130.0);
+    for (i, (input, action)) in rows.iter().take(fit).enumerate() {
+        let y = LIST_TOP + i as f32 * 20.0 + 10.0;
+        c.draw_text(input, Point::new(10.0, y), &key);
+        c.draw_text(action, Point::new(10.0 + col, y), &what);
+    }
+    if rows.is_empty() {
+        let st = TextStyle::new(12.0, theme::NODATA).baseline(Baseline::Middle);
+        c.draw_text("— no bindings —", Point::new(10.0, 40.0), &st);
+    }
+}
+
+/// (input, action) of each binding of `device` in use now, in the layout's order.
+pub(super) fn legend_rows(ds: &DataServer, device: &str) -> Vec<(String, String)> {
+    let text = |g: Guid, k: &str| match ds.try_get(g, PropName::new(k)) {
+        Some(Value::Str(s)) => s.to_string(),
+        _ => String::new(),
+    };
+    let mode = ds.resolve(&["operator"]).map(|op| text(op, "mode")).unwrap_or_default();
+    let Some(folder) = ds.resolve(&["display", "bindings"]) else { return Vec::new() };
+    let mut rows = Vec::new();
+    for g in ds.children(folder).unwrap_or_default() {
+        let action = text(g, "action");
+        let m = text(g, "mode");
+        if text(g, "device") != device || action.is_empty() || !(m.is_empty() || m == mode) {
+            continue;
+        }
+        let mut input = text(g, "input").replace('_', " ");
+        if ds.try_get(g, PropName::new("shift")) == Some(Value::Bool(true)) {
+            input = format!("shift+{input}");
+        }
+        rows.push((input, action));
+    }
+    rows
 }
