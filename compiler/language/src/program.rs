@@ -409,6 +409,8 @@ fn expr_paths(e: &Expr) -> Vec<Path> {
         }
         _ => {}
     });
+    // Most expressions read one path or none: no room kept for more.
+    set.paths.shrink_to_fit();
     set.paths
 }
 

@@ -10,7 +10,6 @@
 use crate::codes;
 use crate::diagnostics::Diagnostics;
 use crate::program::*;
-use std::collections::HashMap;
 use std::sync::Arc;
 
 /// The deepest expression the runtime lowers (`mocu-lower` uses this bound).
@@ -105,7 +104,7 @@ fn roots(p: &Program) -> Vec<&Bound> {
 #[derive(Default)]
 struct Heights {
     /// Per `let` put in place: the depth of its value, at most `MAX_DEPTH + 1`.
-    lets: HashMap<*const Let, usize>,
+    lets: super::FastMap<*const Let, usize>,
 }
 
 impl Heights {

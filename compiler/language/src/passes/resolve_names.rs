@@ -9,6 +9,7 @@ use crate::ast::*;
 use crate::builtins;
 use crate::codes;
 use crate::diagnostics::Diagnostics;
+use std::rc::Rc;
 
 /// A component's parameter names with whether each is required, and its events.
 type ParamsAndEvents<'a> = (Vec<(&'a str, bool)>, Vec<&'a str>);
@@ -17,7 +18,13 @@ type ParamsAndEvents<'a> = (Vec<(&'a str, bool)>, Vec<&'a str>);
 pub type UsedLets = super::FastSet<crate::source::Span>;
 
 pub fn resolve_names(modules: &Modules, defs: &Definitions, diags: &mut Diagnostics) -> UsedLets {
-    let mut r = Resolver { modules, defs, diags, used: UsedLets::default() };
+    let mut r = Resolver {
+        modules,
+        defs,
+        diags,
+        used: UsedLets::default(),
+        signatures: Default::default(),
+    };
     for m in 0..modules.len() {
         r.module(m);
     }
@@ -29,6 +36,8 @@ struct Resolver<'a, 'd> {
     defs: &'a Definitions,
     diags: &'d mut Diagnostics,
     used: UsedLets,
+    /// The signatures of the components used so far, by module and name.
+    signatures: super::FastMap<(ModuleId, &'a str), Rc<ParamsAndEvents<'a>>>,
 }
 
 #[derive(Clone, Default)]
@@ -134,7 +143,16 @@ impl<'a> Resolver<'a, '_> {
             at.iter().for_each(|e| self.expr(e, scope));
         }
         let m = scope.module;
-        // The component's parameter names, whether each is required, and its events.
+        let signature = self.signature(w, m);
+        self.widget_args(w, signature.as_deref(), scope);
+    }
+
+    /// The component's parameter names, whether each is required, and its events: worked
+    /// out once per module and component (an unknown component is reported at each use).
+    fn signature(&mut self, w: &'a Widget, m: ModuleId) -> Option<Rc<ParamsAndEvents<'a>>> {
+        if let Some(known) = self.signatures.get(&(m, w.component.name.as_str())) {
+            return Some(known.clone());
+        }
         let signature: Option<ParamsAndEvents<'a>> = if let Some(n) =
             builtins::native(&w.component.name)
         {
@@ -183,6 +201,20 @@ impl<'a> Resolver<'a, '_> {
             }
             None
         };
+        let signature = signature.map(Rc::new);
+        if let Some(s) = &signature {
+            self.signatures.insert((m, &w.component.name), s.clone());
+        }
+        signature
+    }
+
+    /// A widget's arguments against its component's signature, then its handlers.
+    fn widget_args(
+        &mut self,
+        w: &'a Widget,
+        signature: Option<&ParamsAndEvents<'a>>,
+        scope: &Scope<'a>,
+    ) {
         let mut arg_scope = scope.clone();
         if signature.is_none() {
             // Unknown component: its arguments may name each other (`alarm value > 35`); no
@@ -201,7 +233,7 @@ impl<'a> Resolver<'a, '_> {
             let after_unknown = |p: &str| {
                 i.checked_sub(1).is_some_and(|k| {
                     let prev = &w.args[k].name.name;
-                    prev != "visible" && !params_has(&signature, prev) && p == "to"
+                    prev != "visible" && !params_has(signature, prev) && p == "to"
                 })
             };
             if let Some((params, _)) = &signature
@@ -630,6 +662,6 @@ fn stdlib_file_of(component: &str) -> Option<&'static str> {
 }
 
 /// Whether a component's signature (when known) has parameter `name`.
-fn params_has(signature: &Option<ParamsAndEvents>, name: &str) -> bool {
-    signature.as_ref().is_some_and(|(params, _)| params.iter().any(|(p, _)| *p == name))
+fn params_has(signature: Option<&ParamsAndEvents>, name: &str) -> bool {
+    signature.is_some_and(|(params, _)| params.iter().any(|(p, _)| *p == name))
 }

@@ -100,14 +100,16 @@ fn placeholder(span: Span) -> Expr {
 /// as the parser allows.
 fn digest(name: &str, value: &Expr) -> u64 {
     use std::hash::{Hash, Hasher};
-    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let mut h = crate::passes::FastHasher::default();
     name.hash(&mut h);
     let mut stack = vec![value];
     while let Some(e) = stack.pop() {
         e.ty.hash(&mut h);
         e.span.hash(&mut h);
         std::mem::discriminant(&e.node).hash(&mut h);
-        let mut operands: Vec<&Expr> = Vec::new();
+        // The operands go on the stack, then are turned round to be walked in order.
+        let at = stack.len();
+        let operands = &mut stack;
         match &e.node {
             Node::Number(x) | Node::Duration(x) => x.to_bits().hash(&mut h),
             Node::Bool(b) => b.hash(&mut h),
@@ -146,8 +148,8 @@ fn digest(name: &str, value: &Expr) -> u64 {
                 }
             }
         }
-        operands.len().hash(&mut h);
-        stack.extend(operands.into_iter().rev());
+        (stack.len() - at).hash(&mut h);
+        stack[at..].reverse();
     }
     h.finish()
 }
