@@ -82,6 +82,8 @@ impl Figure {
     fn run(&mut self, seconds: f64) {
         for _ in 0..(seconds * 20.0).round() as usize {
             self.sim.step(0.05);
+            // Frames arrive at the step's time, before the clock moves on.
+            self.ds.quiesce();
             self.clock.advance(Duration::from_millis(50));
             self.ds.quiesce();
         }
@@ -218,8 +220,8 @@ fn figure1_enlarges_any_window_and_the_reticle_stays_on_the_drive_camera() {
 /// Fig. 2 on its 800×480 handheld design: the tracked UGV's drive camera large, its payload
 /// camera and the map small on the left, the UGV's state; the arm's view is a temporary
 /// overlay — there while the arm moves (the golden), gone once it has been still for 5 s.
-/// Touch: a long press on the UGV on the map opens its menu, a tap chooses an item, a tap on
-/// the payload camera swaps it into the main area.
+/// Touch: a tap on the small map swaps it into the main area, a long press on the UGV there
+/// opens its menu, a tap chooses an item, a tap on the payload camera swaps it in.
 #[test]
 fn figure2_shows_the_ugv_its_arm_overlay_while_it_moves_and_answers_touch() {
     let mut f = Figure::new("fig2-handheld.mocu", (800, 480), 8.0);
@@ -240,8 +242,20 @@ fn figure2_shows_the_ugv_its_arm_overlay_while_it_moves_and_answers_touch() {
     f.run(8.0);
     f.frame();
     assert!(!shown(&f), "still for 5 s: the overlay is gone");
-    // Touch: a long press on the UGV's symbol on the small map opens its context menu; a tap
-    // on the payload camera swaps it into the main area.
+    // Touch: a tap on the small map brings it into the main area; a long press on the UGV
+    // there opens the UGV's context menu.
+    let touch_tap = |f: &mut Figure, id: u64, x: f32, y: f32| {
+        f.display.touch(id, TouchPhase::Started, x, y);
+        f.display.touch(id, TouchPhase::Ended, x, y);
+        f.ds.quiesce();
+        f.layout.settle();
+        f.ds.quiesce();
+    };
+    let [tx, ty, tw, th] = f.rect(&["display", "thumb2"]);
+    touch_tap(&mut f, 1, (tx + tw * 0.85) as f32, (ty + th * 0.75) as f32);
+    f.animate(300);
+    f.frame();
+    assert!(f.rect(&["display", "thumb2"])[2] > 500.0, "the map in the main area");
     let map = f.ds.resolve(&["display", "thumb2"]).unwrap();
     let syms = match f.ds.call_wait(map, "symbols", vec![], None) {
         mocu_dataserver::CallOutcome::Accepted(v) => v,
@@ -251,14 +265,21 @@ fn figure2_shows_the_ugv_its_arm_overlay_while_it_moves_and_answers_touch() {
     let [mx, my, _, _] = f.rect(&["display", "thumb2"]);
     let (sx, sy) = (syms[i + 1].as_f64().unwrap(), syms[i + 2].as_f64().unwrap());
     let (x, y) = ((mx + sx) as f32, (my + sy) as f32);
-    f.display.touch(1, TouchPhase::Started, x, y);
+    f.display.touch(2, TouchPhase::Started, x, y);
     f.display.clock().advance(Duration::from_millis(600));
     f.display.touch_tick();
-    f.display.touch(1, TouchPhase::Ended, x, y);
+    f.display.touch(2, TouchPhase::Ended, x, y);
     f.ds.quiesce();
     f.frame();
     let menu = f.ds.resolve(&["display", "context_menu", "menu"]).expect("a context menu");
-    assert_eq!(f.ds.try_get(menu, "item1".into()), Some(Value::str("Stow arm")));
+    let item = |k: &str| f.ds.try_get(menu, k.into());
+    assert_eq!(
+        item("item1"),
+        Some(Value::str("Stow arm")),
+        "{:?} {:?}",
+        item("title"),
+        item("item0")
+    );
     // A tap on "Stow arm" (the second row) stows the arm.
     let [wx, wy, _, _] = f.rect(&["display", "context_menu"]);
     let (x, y) = ((wx + 40.0) as f32, (wy + 26.0 + 1.5 * 26.0) as f32);
@@ -271,14 +292,11 @@ fn figure2_shows_the_ugv_its_arm_overlay_while_it_moves_and_answers_touch() {
     assert!(f.ds.resolve(&["display", "context_menu"]).is_none(), "closed after choosing");
     assert_eq!(f.ds.try_get(arm, "moving".into()), Some(Value::Bool(true)), "stowing");
     let [tx, ty, tw, th] = f.rect(&["display", "thumb1"]);
-    let (x, y) = ((tx + tw / 2.0) as f32, (ty + th / 2.0) as f32);
-    f.display.touch(2, TouchPhase::Started, x, y);
-    f.display.touch(2, TouchPhase::Ended, x, y);
-    f.ds.quiesce();
-    f.layout.settle();
+    touch_tap(&mut f, 4, (tx + tw / 2.0) as f32, (ty + th / 2.0) as f32);
     f.animate(300);
     f.frame();
     assert!(f.rect(&["display", "thumb1"])[2] > 500.0, "the payload camera in the main area");
+    assert!(f.rect(&["display", "thumb2"])[2] < 300.0, "the map small again");
 }
 
 /// Fig. 3 on its 1280×720 design: the lead USV's video with gauges, the second USV's forward
