@@ -17,6 +17,7 @@
 //! window shows more ground.
 
 mod chart;
+mod edit;
 mod symbols;
 mod tiles;
 pub mod view;
@@ -66,6 +67,10 @@ struct State {
     features_watch: Option<PathWatch>,
     features_sub: Option<SubscriptionId>,
     features: chart::FeatureCache,
+    /// Where each window drew each route's waypoints, for editing.
+    waypoints: HashMap<Guid, edit::Drawn>,
+    /// The waypoint being dragged, and in which window.
+    drag: Option<(Guid, Guid)>,
 }
 
 impl MapModule {
@@ -144,7 +149,7 @@ impl Drop for MapModule {
             self.shared.ds.unsubscribe(s);
         }
         for m in maps {
-            for name in ["paint", "pointer", "symbols"] {
+            for name in ["paint", "pointer", "symbols", "waypoints"] {
                 let _ = self.shared.ds.unpublish_method(m, name);
             }
         }
@@ -177,6 +182,7 @@ impl Shared {
                 st.maps.retain(|m| *m != g);
                 st.symbols.remove(&g);
                 st.views.remove(&g);
+                st.waypoints.remove(&g);
             }
             _ => {}
         }
@@ -303,10 +309,33 @@ impl Shared {
                 args[2].as_f64().unwrap_or(0.0) as f32,
                 args[3].as_f64().unwrap_or(0.0) as f32,
             );
-            if args[0].as_str() == Some("down") {
-                sh.press(g, args[1].as_i64().unwrap_or(-1), p);
+            let (kind, button) = (args[0].as_str().unwrap_or(""), args[1].as_i64().unwrap_or(-1));
+            if !sh.edit(g, kind, button, p) && kind == "down" {
+                sh.press(g, button, p);
             }
             CallOutcome::Accepted(vec![])
+        });
+        let weak = Arc::downgrade(self);
+        let spec = MethodSpec::new("waypoints")
+            .describe("Where the map drew each route's waypoints: [route path, index, x, y, …]");
+        let _ = self.ds.publish_method_fn(g, spec, move |_| {
+            let Some(sh) = weak.upgrade() else {
+                return CallOutcome::Failed("map stopped".into());
+            };
+            let drawn = sh.state.lock().waypoints.get(&g).cloned().unwrap_or_default();
+            let mut out = Vec::new();
+            for (route, wps) in drawn {
+                let path = sh.ds.path_text(route);
+                for (i, (_, p)) in wps.iter().enumerate() {
+                    out.extend([
+                        Value::str(&path),
+                        Value::Int(i as i64),
+                        Value::Float(p.x as f64),
+                        Value::Float(p.y as f64),
+                    ]);
+                }
+            }
+            CallOutcome::Accepted(out)
         });
         let weak = Arc::downgrade(self);
         let _ = self.ds.publish_method_fn(g, MethodSpec::new("symbols"), move |_| {
@@ -429,13 +458,16 @@ impl Shared {
         for (v, trail) in vehicles.iter().zip(&trails) {
             symbols::draw_trail(c, trail, v.colour, u);
         }
+        let mut drawn: edit::Drawn = Vec::new();
         for (v, p) in vehicles.iter().zip(&at) {
             for r in &v.routes {
                 let pts: Vec<Point> =
                     r.points.iter().map(|(la, lo)| view.to_screen(*la, *lo)).collect();
                 symbols::draw_route(c, &pts, *p, r.next, r.active, v.colour, u);
+                drawn.push((r.guid, r.waypoints.iter().copied().zip(pts).collect()));
             }
         }
+        self.state.lock().waypoints.insert(g, drawn);
         let mut labels = Labels::new(whole.inset(2.0 * u));
         labels.block(symbols::draw_scale_bar(c, &view, u));
         labels.block(symbols::draw_north_arrow(c, &view, u));
@@ -587,17 +619,15 @@ impl Shared {
                     // Waypoints form a chain (each the child of the one before, so they can
                     // be edited by insert-between and delete-and-promote); siblings are
                     // taken in order too.
-                    let mut points = Vec::new();
-                    let mut level = self.ds.children(r).unwrap_or_default();
-                    while let Some(&first) = level.first() {
-                        points.extend(level.iter().filter_map(|w| place(*w)));
-                        level = self.ds.children(first).unwrap_or_default();
-                        if points.len() > 10_000 {
-                            break;
-                        }
-                    }
+                    let (waypoints, points): (Vec<Guid>, Vec<(f64, f64)>) =
+                        edit::route_waypoints(&self.ds, r)
+                            .into_iter()
+                            .filter_map(|w| Some((w, place(w)?)))
+                            .unzip();
                     let is_active = active == Some(r);
                     routes.push(MapRoute {
+                        guid: r,
+                        waypoints,
                         points,
                         active: is_active,
                         next: next.filter(|_| is_active).and_then(|n| usize::try_from(n).ok()),
@@ -635,6 +665,9 @@ struct MapVehicle {
 }
 
 struct MapRoute {
+    guid: Guid,
+    /// Its waypoints (those with a position), in order.
+    waypoints: Vec<Guid>,
     /// Latitude, longitude of each waypoint, in order.
     points: Vec<(f64, f64)>,
     /// The vehicle's `route` is this one.

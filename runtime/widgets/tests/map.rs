@@ -268,3 +268,83 @@ fn a_vehicle_in_the_local_frame_is_anchored_at_the_configured_origin() {
     let (a, b) = (at("local"), at("global"));
     assert!((a.0 - b.0).abs() < 0.5 && (a.1 - b.1).abs() < 0.5, "{a:?} vs {b:?}");
 }
+
+impl Rig {
+    /// Where the map drew route `path`'s waypoints, in order.
+    fn drawn(&self, path: &str) -> Vec<(f32, f32)> {
+        let win = self.ds.resolve(&["display", "chart"]).unwrap();
+        let out = self.ds.call_wait(win, "waypoints", vec![], None);
+        let mocu_dataserver::CallOutcome::Accepted(v) = out else { panic!("{out:?}") };
+        v.chunks(4)
+            .filter(|c| c[0].as_str() == Some(path))
+            .map(|c| (c[2].as_f64().unwrap() as f32, c[3].as_f64().unwrap() as f32))
+            .collect()
+    }
+
+    fn pointer(&mut self, kind: &str, button: i64, (x, y): (f32, f32)) {
+        let win = self.ds.resolve(&["display", "chart"]).unwrap();
+        let args = vec![
+            Value::str(kind),
+            Value::Int(button),
+            Value::Float(x as f64),
+            Value::Float(y as f64),
+        ];
+        assert!(self.ds.call_wait(win, "pointer", args, None).is_accepted());
+        self.frame();
+    }
+
+    /// The route's waypoints as (x, y) in metres, in order.
+    fn route(&self, route: Guid) -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        let mut level = self.ds.children(route).unwrap();
+        while let Some(&first) = level.first() {
+            for w in &level {
+                let get = |k: &str| self.ds.try_get(*w, k.into()).and_then(|v| v.as_f64()).unwrap();
+                out.push((get("x"), get("y")));
+            }
+            level = self.ds.children(first).unwrap();
+        }
+        out
+    }
+}
+
+/// Editing on the map changes the world-model route: a press on a leg inserts a waypoint
+/// there, a drag moves one waypoint (and nothing else), the waypoint's context menu
+/// deletes it.
+#[test]
+fn a_route_is_edited_on_the_map_by_inserting_dragging_and_deleting_waypoints() {
+    let mut rig = Rig::new("tests/map.mocu", with_harbour(), 2);
+    let path = "root.vehicles.usv2.routes.patrol";
+    let route = rig.ds.resolve(&["vehicles", "usv2", "routes", "patrol"]).unwrap();
+    let before = rig.route(route);
+    let at = rig.drawn(path);
+    assert_eq!((before.len(), at.len()), (4, 4));
+    // Drag waypoint 2 thirty pixels east: only it moves, about 30 px worth of metres.
+    rig.pointer("down", 0, at[1]);
+    rig.pointer("move", -1, (at[1].0 + 15.0, at[1].1));
+    rig.pointer("move", -1, (at[1].0 + 30.0, at[1].1));
+    rig.pointer("up", 0, (at[1].0 + 30.0, at[1].1));
+    let moved = rig.route(route);
+    let (dx, dy) = (moved[1].0 - before[1].0, moved[1].1 - before[1].1);
+    assert!(dx > 5.0 && dy.abs() < 1.0, "moved by {dx}, {dy}");
+    assert_eq!((moved[0], moved[2], moved[3]), (before[0], before[2], before[3]));
+    // A press in the middle of the first leg puts a waypoint there, second in the route.
+    let at = rig.drawn(path);
+    let mid = ((at[0].0 + at[1].0) / 2.0, (at[0].1 + at[1].1) / 2.0);
+    rig.pointer("down", 0, mid);
+    rig.pointer("up", 0, mid);
+    let inserted = rig.route(route);
+    assert_eq!(inserted.len(), 5);
+    let want = ((moved[0].0 + moved[1].0) / 2.0, (moved[0].1 + moved[1].1) / 2.0);
+    let near = (inserted[1].0 - want.0).abs() < 2.0 && (inserted[1].1 - want.1).abs() < 2.0;
+    assert!(near, "{inserted:?} want {want:?}");
+    // A right press on it opens its menu; "Delete waypoint 2" removes it.
+    let at = rig.drawn(path);
+    rig.pointer("down", 1, at[1]);
+    let menu = rig.ds.resolve(&["display", "context_menu", "menu"]).expect("a context menu");
+    assert_eq!(rig.ds.try_get(menu, "item0".into()), Some(Value::str("Delete waypoint 2")));
+    mocu_widgets::menu::choose(&rig.ds, menu, 0);
+    rig.frame();
+    assert_eq!(rig.route(route), moved);
+    assert!(rig.ds.resolve(&["display", "context_menu"]).is_none(), "the menu closed");
+}
