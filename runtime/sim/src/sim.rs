@@ -240,6 +240,16 @@ impl Sim {
                 ds.try_get(v.nav, "goal_throttle".into()).and_then(|x| x.as_f64()).unwrap_or(0.0),
                 ds.try_get(v.nav, "goal_rudder".into()).and_then(|x| x.as_f64()).unwrap_or(0.0),
             );
+            // A route edited in the world model (e.g. on the map) is flown as it is now.
+            if let Guidance::Route { route, points, .. } = &mut v.guidance {
+                let now: Vec<(f64, f64)> = world::route_waypoints(ds, *route)
+                    .into_iter()
+                    .filter_map(|wp| world::pair(ds, wp, "x", "y"))
+                    .collect();
+                if !now.is_empty() && now != *points {
+                    *points = now;
+                }
+            }
             let noise = w.rng.unit();
             v.step(dt, goal, noise);
             if let Some(m) = &mut v.manipulator {

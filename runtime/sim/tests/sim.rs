@@ -371,3 +371,23 @@ fn the_ugv_manipulator_moves_its_joints_and_gripper_toward_their_goals() {
     ds.quiesce();
     assert_eq!(get("elbow"), Value::Float(0.0));
 }
+
+/// A route edited in the world model while the vehicle flies it (a waypoint moved on the
+/// map) is flown as edited: the vehicle heads for the waypoint's new place.
+#[test]
+fn a_waypoint_moved_while_the_route_is_flown_is_flown_to_where_it_is_now() {
+    let cfg = SimConfig { usv: 1, ugv: 0, uav: 0, appear_every: 0.0, ..SimConfig::default() };
+    let (ds, sim) = sim(cfg);
+    run(&sim, 0.1);
+    let usv = v(&ds, "usv1");
+    let route = ds.resolve(&["vehicles", "usv1", "routes", "patrol"]).unwrap();
+    let wps = route_waypoints(&ds, route);
+    let next = ds.get(usv, "route_next").unwrap().as_i64().unwrap() as usize;
+    let far = (num(&ds, &["vehicles", "usv1", "nav"], "x") + 400.0, 0.0);
+    ds.set(wps[next], "x", Value::Float(far.0)).unwrap();
+    ds.set(wps[next], "y", Value::Float(far.1)).unwrap();
+    run(&sim, 60.0);
+    let (x, y) =
+        (num(&ds, &["vehicles", "usv1", "nav"], "x"), num(&ds, &["vehicles", "usv1", "nav"], "y"));
+    assert!((x - far.0).hypot(y - far.1) < 100.0, "usv1 at {x}, {y}, the waypoint at {far:?}");
+}
