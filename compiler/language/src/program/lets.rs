@@ -104,7 +104,7 @@ fn digest(name: &str, value: &Expr) -> u64 {
     name.hash(&mut h);
     let mut stack = vec![value];
     while let Some(e) = stack.pop() {
-        e.ty.hash(&mut h);
+        hash_type(&e.ty, &mut h);
         e.span.hash(&mut h);
         std::mem::discriminant(&e.node).hash(&mut h);
         // The operands go on the stack, then are turned round to be walked in order.
@@ -152,6 +152,19 @@ fn digest(name: &str, value: &Expr) -> u64 {
         stack[at..].reverse();
     }
     h.finish()
+}
+
+/// Hashes a type by its text: interned names' keys depend on the order a process met them,
+/// and a bundle is read by another process than the one that wrote it.
+fn hash_type(t: &Type, h: &mut impl std::hash::Hasher) {
+    use std::hash::Hash;
+    std::mem::discriminant(&t.kind).hash(h);
+    t.absent.hash(h);
+    match t.kind {
+        TypeKind::Number { unit } | TypeKind::Range { unit } => unit.map(|u| u.as_str()).hash(h),
+        TypeKind::Object { object_type } => object_type.map(|o| o.as_str()).hash(h),
+        _ => {}
+    }
 }
 
 /// A shared reference to a [`Let`]. Equal when it is the same `let` or one with the same
