@@ -84,6 +84,16 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
     while i < bytes.len() {
         let b = bytes[i];
         let in_string = matches!(stack.last(), Some(Frame::Str(_)));
+        // Most bytes (names, numbers, blanks, operators; a string's text) matter to no rule
+        // below: runs of them are skipped in a tight loop.
+        let plain = if in_string { &PLAIN_TEXT } else { &PLAIN_CODE };
+        if plain[usize::from(b)] {
+            i += 1;
+            while i < bytes.len() && plain[usize::from(bytes[i])] {
+                i += 1;
+            }
+            continue;
+        }
         if in_string {
             match b {
                 b'"' => {
@@ -263,6 +273,27 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
     }
     report_unclosed_string(file, &stack, diags, &mut out, bytes.len());
     out
+}
+
+/// Bytes that [`scan`] passes over outside strings, and inside them.
+static PLAIN_CODE: [bool; 256] = plain_bytes(b"/\"([{)]}\n'", true);
+static PLAIN_TEXT: [bool; 256] = plain_bytes(b"\"\\{}\n", false);
+
+const fn plain_bytes(special: &[u8], non_ascii_special: bool) -> [bool; 256] {
+    let mut table = [true; 256];
+    let mut i = 0;
+    while i < special.len() {
+        table[special[i] as usize] = false;
+        i += 1;
+    }
+    if non_ascii_special {
+        let mut b = 0x80;
+        while b < 256 {
+            table[b] = false;
+            b += 1;
+        }
+    }
+    table
 }
 
 /// Typographic quotes, opening or closing.

@@ -47,8 +47,9 @@ pub fn parse_counted(file: FileId, text: &str, diags: &mut Diagnostics) -> (File
     // Lexical problems are reported once, at their start; the items they touch are skipped.
     let scan = crate::lexer::scan(file, text, diags);
     let mut counts = ParseCounts::default();
-    let mut items = Vec::new();
-    for chunk in split_items(text) {
+    let chunks = split_items(text);
+    let mut items = Vec::with_capacity(chunks.len());
+    for chunk in chunks {
         if scan.is_broken(chunk.start..chunk.end) {
             items.extend(broken_let(file, text, &chunk));
             continue;

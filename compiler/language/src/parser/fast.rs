@@ -21,35 +21,33 @@ use crate::source::{FileId, Span};
 /// items go to pest, which parses them on a stack of their own.
 const NEST_LIMIT: usize = 40;
 
-/// Keywords that are not names (grammar.pest, `keyword`).
-const KEYWORDS: &[&[u8]] = &[
-    b"use",
-    b"let",
-    b"window",
-    b"in",
-    b"component",
-    b"bind",
-    b"menu",
-    b"watch",
-    b"for",
-    b"each",
-    b"if",
-    b"then",
-    b"else",
-    b"true",
-    b"false",
-    b"self",
-    b"and",
-    b"or",
-    b"not",
-    b"as",
-];
+/// A keyword, which is not a name (grammar.pest, `keyword`).
+fn is_keyword(word: &[u8]) -> bool {
+    match word.len() {
+        2 => matches!(word, b"in" | b"if" | b"or" | b"as"),
+        3 => matches!(word, b"use" | b"let" | b"for" | b"and" | b"not"),
+        4 => matches!(word, b"bind" | b"menu" | b"each" | b"then" | b"else" | b"true" | b"self"),
+        5 => matches!(word, b"watch" | b"false"),
+        6 => word == b"window",
+        9 => word == b"component",
+        _ => false,
+    }
+}
 
 /// Parses one item chunk (`src`, at `offset` in the file): the tree, or `None` where the
 /// reference parser must decide.
 pub fn parse_item(file: FileId, src: &str, offset: usize) -> Option<Item> {
-    let mut p =
-        Fast { s: src, b: src.as_bytes(), pos: 0, file, offset, nest: 0, depth: 0, bail: false };
+    let mut p = Fast {
+        s: src,
+        b: src.as_bytes(),
+        pos: 0,
+        file,
+        offset,
+        nest: 0,
+        depth: 0,
+        bail: false,
+        elems: Vec::new(),
+    };
     let item = p.item();
     p.ws();
     match item {
@@ -71,6 +69,8 @@ pub(super) struct Fast<'a> {
     depth: usize,
     /// Gave up: the item goes to pest whatever the rest says.
     bail: bool,
+    /// The flat lists of the expressions being read (expr.rs).
+    elems: Vec<expr::Elem>,
 }
 
 fn is_ident_byte(c: u8) -> bool {
@@ -157,7 +157,7 @@ impl<'a> Fast<'a> {
         }
         let end = self.ident_end(self.pos + 1);
         let word = &self.b[self.pos..end];
-        if KEYWORDS.contains(&word) {
+        if is_keyword(word) {
             return None;
         }
         let ident =

@@ -44,7 +44,25 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
     // The last code was the `}` that closed a top-level item: any item keyword may follow on
     // the same line (`window a { … } let x = 1`: whitespace is free).
     let mut item_closed = false;
+    // The end of the last code (not whitespace, not comment) seen: where a chunk ends.
+    let mut last_code = 0usize;
+    let mut ends: Vec<usize> = Vec::new();
     while i < bytes.len() {
+        if !column0_splits && !depth_stack.is_empty() {
+            // Inside an item's braces no item starts: only strings, braces, comments and line
+            // ends matter, so the names, numbers and operators between them are skipped.
+            while i < bytes.len() {
+                match bytes[i] {
+                    b'"' | b'{' | b'}' | b'/' | b'\n' => break,
+                    b' ' | b'\t' | b'\r' => {}
+                    _ => last_code = i + 1,
+                }
+                i += 1;
+            }
+            if i >= bytes.len() {
+                break;
+            }
+        }
         let b = bytes[i];
         match b {
             b'\n' => {
@@ -89,10 +107,12 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
         };
         if item_here && starts_keyword(&bytes[i..]) {
             if let Some(s) = stray_start.take() {
-                stray.push((s, trim_end(text, s, i)));
+                stray.push((s, char_boundary(text, last_code.max(s))));
+                debug_assert_eq!(stray.last().map(|x| x.1), Some(trim_end(text, s, i)));
             }
-            if !starts.is_empty() {
+            if let Some(&previous) = starts.last() {
                 unclosed.push(depth_stack.first().copied());
+                ends.push(char_boundary(text, last_code.max(previous)));
             }
             depth_stack.clear();
             starts.push(i);
@@ -106,6 +126,7 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
                     i += if bytes[i] == b'\\' { 2 } else { 1 };
                 }
                 i += 1;
+                last_code = i.min(bytes.len());
                 continue;
             }
             b'{' => depth_stack.push(i),
@@ -114,20 +135,27 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
             }
             _ => {}
         }
+        last_code = i + 1;
         i += 1;
     }
     if let Some(s) = stray_start.take() {
-        stray.push((s, trim_end(text, s, text.len())));
+        stray.push((s, char_boundary(text, last_code.max(s))));
+        debug_assert_eq!(stray.last().map(|x| x.1), Some(trim_end(text, s, text.len())));
     }
-    if !starts.is_empty() {
+    if let Some(&last) = starts.last() {
         unclosed.push(depth_stack.first().copied());
+        ends.push(char_boundary(text, last_code.max(last)));
     }
     let mut chunks: Vec<Chunk> = stray
         .into_iter()
         .map(|(start, end)| Chunk { start, end, kind: ChunkKind::Stray })
         .collect();
     for (n, &start) in starts.iter().enumerate() {
-        let end = trim_end(text, start, starts.get(n + 1).copied().unwrap_or(text.len()));
+        let end = ends[n];
+        debug_assert_eq!(
+            end,
+            trim_end(text, start, starts.get(n + 1).copied().unwrap_or(text.len()))
+        );
         let kind = match unclosed.get(n).copied().flatten() {
             Some(open) => ChunkKind::Unclosed(open),
             None => ChunkKind::Item,
@@ -138,7 +166,17 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
     chunks
 }
 
-/// The end of the last code (not whitespace, not comment) in `text[start..end]`.
+/// `at`, or the next character boundary after it.
+fn char_boundary(text: &str, at: usize) -> usize {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at += 1;
+    }
+    at
+}
+
+/// The end of the last code (not whitespace, not comment) in `text[start..end]`: the chunk
+/// ends [`split_at`] finds as it goes, checked against this in debug builds.
 fn trim_end(text: &str, start: usize, end: usize) -> usize {
     let b = text.as_bytes();
     let mut last = start;

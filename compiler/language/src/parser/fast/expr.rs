@@ -8,7 +8,7 @@ use crate::parser::MAX_DEPTH;
 use crate::source::Span;
 
 /// One element of an expression as pest reads it, flat.
-enum Elem {
+pub(super) enum Elem {
     Prefix(UnOp, Span),
     Term(Expr),
     Infix(BinOp, u8, bool),
@@ -50,18 +50,26 @@ impl<'a> Fast<'a> {
         r
     }
 
+    /// The flat list goes on [`Fast::elems`], shared by every expression (no list of its
+    /// own for each), from `base` on.
     fn expr_inner(&mut self) -> Option<(Expr, usize)> {
-        let mut elems: Vec<Elem> = Vec::new();
+        let base = self.elems.len();
+        let r = self.expr_flat(base);
+        self.elems.truncate(base);
+        r
+    }
+
+    fn expr_flat(&mut self, base: usize) -> Option<(Expr, usize)> {
         let mut ops = 0usize;
-        self.prefixes(&mut elems, &mut ops)?;
+        self.prefixes(&mut ops)?;
         self.ws();
         let (first, mut deepest) = self.term()?;
         self.ws();
-        // The commonest case, a single term, makes no list.
-        let mut single = if elems.is_empty() {
+        // The commonest case, a single term, goes on no list.
+        let mut single = if self.elems.len() == base {
             Some(first)
         } else {
-            elems.push(Elem::Term(first));
+            self.elems.push(Elem::Term(first));
             None
         };
         loop {
@@ -72,37 +80,37 @@ impl<'a> Fast<'a> {
                 break;
             };
             if let Some(t) = single.take() {
-                elems.push(Elem::Term(t));
+                self.elems.push(Elem::Term(t));
             }
-            let (n, ops_before) = (elems.len(), ops);
-            elems.push(Elem::Infix(op, power, right));
+            let (n, ops_before) = (self.elems.len(), ops);
+            self.elems.push(Elem::Infix(op, power, right));
             ops += 1;
             self.deeper()?;
             self.ws();
-            if self.prefixes(&mut elems, &mut ops).is_some() {
+            if self.prefixes(&mut ops).is_some() {
                 self.ws();
                 if let Some((t, need)) = self.term() {
                     deepest = deepest.max(need);
-                    elems.push(Elem::Term(t));
+                    self.elems.push(Elem::Term(t));
                     continue;
                 }
             }
             self.pos = save;
-            elems.truncate(n);
+            self.elems.truncate(n);
             self.depth -= ops - ops_before;
             ops = ops_before;
             break;
         }
         let e = match single {
             Some(e) => e,
-            None => climb(&mut elems.into_iter().peekable(), 0),
+            None => climb(&mut self.elems.drain(base..).peekable(), 0),
         };
         Some((e, 1 + ops + deepest))
     }
 
     /// `prefix*`: `-`, `!` or `not`, each one more level (bounded: a longer run goes to pest,
     /// which refuses it).
-    fn prefixes(&mut self, elems: &mut Vec<Elem>, ops: &mut usize) -> Option<()> {
+    fn prefixes(&mut self, ops: &mut usize) -> Option<()> {
         let mut first = true;
         loop {
             let save = self.pos;
@@ -129,7 +137,7 @@ impl<'a> Fast<'a> {
                 }
             };
             first = false;
-            elems.push(Elem::Prefix(op, self.span(start, self.pos)));
+            self.elems.push(Elem::Prefix(op, self.span(start, self.pos)));
             *ops += 1;
             self.deeper()?;
         }
@@ -497,8 +505,10 @@ impl<'a> Fast<'a> {
     }
 }
 
+type Elems<'e> = std::iter::Peekable<std::vec::Drain<'e, Elem>>;
+
 /// Precedence climbing, as parser.rs's `climb` and `operand` do it over pest's pairs.
-fn climb(it: &mut std::iter::Peekable<std::vec::IntoIter<Elem>>, floor: u8) -> Expr {
+fn climb(it: &mut Elems, floor: u8) -> Expr {
     let mut lhs = operand(it);
     while let Some(&Elem::Infix(op, power, right)) = it.peek() {
         if power <= floor {
@@ -512,7 +522,7 @@ fn climb(it: &mut std::iter::Peekable<std::vec::IntoIter<Elem>>, floor: u8) -> E
     lhs
 }
 
-fn operand(it: &mut std::iter::Peekable<std::vec::IntoIter<Elem>>) -> Expr {
+fn operand(it: &mut Elems) -> Expr {
     match it.next() {
         Some(Elem::Prefix(op, span)) => {
             let rhs = climb(it, PREFIX - 1);

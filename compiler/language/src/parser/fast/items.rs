@@ -352,7 +352,9 @@ impl<'a> Fast<'a> {
         self.ws();
         let mut args = Vec::new();
         self.star(|p| {
-            if STYLE_KEYS.iter().chain(PRIMITIVE_NAMES).any(|k| p.word_here(k.as_bytes())) {
+            if p.peek().is_ascii_lowercase()
+                && STYLE_KEYS.iter().chain(PRIMITIVE_NAMES).any(|k| p.word_here(k.as_bytes()))
+            {
                 return false;
             }
             p.top_expr().map(|e| args.push(e)).is_some()
