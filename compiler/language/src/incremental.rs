@@ -19,10 +19,10 @@
 //! unchanged file costs a cut and a hash of its items.
 
 use crate::ast::*;
-use crate::codes;
 use crate::diagnostics::Diagnostics;
 use crate::parser::{self, ChunkKind};
-use crate::passes::{Module, Modules, UseEdge};
+use crate::passes::Modules;
+use crate::passes::load_sources::load_sources_with;
 use crate::source::{FileId, SourceLoader, SourceMap, Span};
 use crate::{Config, Program, Schema};
 use std::collections::HashMap;
@@ -206,78 +206,9 @@ impl ItemCache {
         self.round += 1;
         let round = self.round;
         self.trees.retain(|_, slot| slot.seen + KEEP_ROUNDS >= round);
-        let mut modules: Modules = Vec::new();
-        let mut stack: Vec<(usize, Option<Span>)> = Vec::new();
-        self.load(path, text, loader, sources, diags, &mut modules, &mut stack);
-        modules
-    }
-
-    // FIXME: a copy of `passes::load_sources::load`, its `parser::parse` made `self.parse`;
-    // when passes/ is free again, `load_sources` takes the parse as an argument and this copy
-    // goes (`reuse_checks_as_the_checker_does` keeps the two in step until then).
-    #[allow(clippy::too_many_arguments)]
-    fn load(
-        &mut self,
-        path: &str,
-        text: String,
-        loader: &dyn SourceLoader,
-        sources: &mut SourceMap,
-        diags: &mut Diagnostics,
-        modules: &mut Modules,
-        stack: &mut Vec<(usize, Option<Span>)>,
-    ) -> usize {
-        let file = match sources.find(path) {
-            Some(f) => f,
-            None => sources.add(path.to_string(), text),
-        };
-        let ast = self.parse(path, file, &sources.get(file).text, diags);
-        let id = modules.len();
-        let uses: Vec<_> = ast
-            .items
-            .iter()
-            .filter_map(|i| if let Item::Use(u) = i { Some(u.clone()) } else { None })
-            .collect();
-        modules.push(Module { file, path: path.to_string(), ast, uses: Vec::new() });
-        stack.push((id, None));
-        let mut edges = Vec::new();
-        for u in uses {
-            let Some(target) = loader.resolve(path, &u.path) else {
-                diags
-                    .error(codes::FILE_NOT_FOUND, u.path_span, format!("cannot find `{}`", u.path))
-                    .label("no such file")
-                    .help("a `use` path is relative to this file; `stdlib/…` also searches the standard library (docs/language.md, \"Files\")");
-                continue;
-            };
-            if let Some(pos) = stack.iter().position(|&(m, _)| modules[m].path == target) {
-                if let Some(top) = stack.last_mut() {
-                    top.1 = Some(u.span);
-                }
-                report_cycle(&stack[pos..], modules, diags);
-                continue;
-            }
-            if let Some(top) = stack.last_mut() {
-                top.1 = Some(u.span);
-            }
-            let existing = modules.iter().position(|m| m.path == target);
-            let m = match existing {
-                Some(m) => m,
-                None => match loader.read(&target) {
-                    Ok(text) => self.load(&target, text, loader, sources, diags, modules, stack),
-                    Err(e) => {
-                        diags.error(
-                            codes::FILE_NOT_FOUND,
-                            u.path_span,
-                            format!("cannot read `{}`: {e}", u.path),
-                        );
-                        continue;
-                    }
-                },
-            };
-            edges.push(UseEdge { target: m, alias: u.alias.as_ref().map(|a| a.name.clone()) });
-        }
-        stack.pop();
-        modules[id].uses = edges;
-        id
+        load_sources_with(path, text, loader, sources, diags, &mut |path, file, text, diags| {
+            self.parse(path, file, text, diags)
+        })
     }
 }
 
@@ -306,21 +237,6 @@ fn parse_in_place(
     // Bytes, not characters, are blanked: offsets stay those of the file.
     blanked.push_str(src);
     parser::parse(file, &blanked, diags).items
-}
-
-// FIXME: a copy of `passes::load_sources::report_cycle` (see `ItemCache::load`).
-fn report_cycle(cycle: &[(usize, Option<Span>)], modules: &Modules, diags: &mut Diagnostics) {
-    let Some(first) = (0..cycle.len()).min_by_key(|&k| modules[cycle[k].0].path.as_str()) else {
-        return;
-    };
-    let into = (first + cycle.len() - 1) % cycle.len();
-    let Some(span) = cycle[into].1 else { return };
-    let chain: Vec<&str> = (0..=cycle.len())
-        .map(|k| modules[cycle[(first + k) % cycle.len()].0].path.as_str())
-        .collect();
-    diags
-        .error(codes::USE_CYCLE, span, format!("`use` cycle: {}", chain.join(" → ")))
-        .help("move the shared definitions into a third file that both use");
 }
 
 /// Fx, rustc's hash: item texts are hashed twice a check, and SipHash (std's) was a tenth of

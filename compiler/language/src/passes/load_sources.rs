@@ -3,11 +3,15 @@
 //! every later pass needs the trees of all files.
 
 use super::{Module, Modules, UseEdge};
-use crate::ast::Item;
+use crate::ast::{File, Item};
 use crate::codes;
 use crate::diagnostics::Diagnostics;
 use crate::parser;
-use crate::source::{SourceLoader, SourceMap, Span};
+use crate::source::{FileId, SourceLoader, SourceMap, Span};
+
+/// How a file's text becomes its tree: the parser, or a cache in front of it
+/// (`incremental::ItemCache`). Arguments: the file's path, its id, its text.
+pub type Parse<'a> = dyn FnMut(&str, FileId, &str, &mut Diagnostics) -> File + 'a;
 
 /// Loads `path` (already resolved by the caller) and its uses. Module 0 is `path`.
 /// Returns `None` when `path` itself cannot be read (the caller reports that).
@@ -18,12 +22,27 @@ pub fn load_sources(
     sources: &mut SourceMap,
     diags: &mut Diagnostics,
 ) -> Modules {
+    load_sources_with(path, text, loader, sources, diags, &mut |_, file, text, diags| {
+        parser::parse(file, text, diags)
+    })
+}
+
+/// [`load_sources`], each file parsed by `parse`.
+pub fn load_sources_with(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+    parse: &mut Parse<'_>,
+) -> Modules {
     let mut modules: Modules = Vec::new();
     let mut stack: Vec<(usize, Option<Span>)> = Vec::new();
-    load(path, text, loader, sources, diags, &mut modules, &mut stack);
+    load(path, text, loader, sources, diags, &mut modules, &mut stack, parse);
     modules
 }
 
+#[allow(clippy::too_many_arguments)]
 fn load(
     path: &str,
     text: String,
@@ -33,13 +52,14 @@ fn load(
     modules: &mut Modules,
     // The files being loaded, each with the span of its `use` being followed.
     stack: &mut Vec<(usize, Option<Span>)>,
+    parse: &mut Parse<'_>,
 ) -> usize {
     // The text is moved into the source map (not copied) and parsed from there.
     let file = match sources.find(path) {
         Some(f) => f,
         None => sources.add(path.to_string(), text),
     };
-    let ast = parser::parse(file, &sources.get(file).text, diags);
+    let ast = parse(path, file, &sources.get(file).text, diags);
     let id = modules.len();
     let uses: Vec<_> = ast
         .items
@@ -71,7 +91,7 @@ fn load(
         let m = match existing {
             Some(m) => m,
             None => match loader.read(&target) {
-                Ok(text) => load(&target, text, loader, sources, diags, modules, stack),
+                Ok(text) => load(&target, text, loader, sources, diags, modules, stack, parse),
                 Err(e) => {
                     diags.error(
                         codes::FILE_NOT_FOUND,
