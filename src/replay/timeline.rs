@@ -1,6 +1,7 @@
 //! The replay's controls and its timeline strip: what the keyboard asks for, and a window
 //! along the bottom of the screen showing where the replay is, whether it plays, and how
-//! fast. Shown only in a window: headless frames (and golden frames) are the layout's alone.
+//! fast; a press on its bar seeks there, and dragging along it scrubs. Shown only in a
+//! window: headless frames (and golden frames) are the layout's alone.
 
 use mocu_dataserver::{
     CallOutcome, DataServer, Guid, MethodSpec, ObjectInfo, ParamSpec, ValueKind,
@@ -8,6 +9,7 @@ use mocu_dataserver::{
 use mocu_display::{Align, Baseline, Canvas, Color, Point, Rect, TextStyle};
 use std::sync::Arc;
 use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What a key asks the replay to do.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -18,6 +20,8 @@ pub enum Control {
     Faster,
     Start,
     End,
+    /// Go to this trial time (seconds from the start): a press or a drag on the timeline.
+    Seek(f64),
 }
 
 impl Control {
@@ -73,23 +77,66 @@ pub fn keyboard(ds: &DataServer, controls: crossbeam_channel::Sender<Control>) -
     Some(kb)
 }
 
-/// The strip: a window over the bottom of the screen, painted from `position`.
-pub fn strip(ds: &DataServer, screen: (u32, u32), position: Arc<Mutex<Position>>) -> Option<Guid> {
+/// The strip: a window over the bottom of the screen, painted from `position`; presses
+/// and drags on it go to `controls` as [`Control::Seek`].
+pub fn strip(
+    ds: &DataServer,
+    screen: (u32, u32),
+    position: Arc<Mutex<Position>>,
+    controls: crossbeam_channel::Sender<Control>,
+) -> Option<Guid> {
     let display = mocu_display::ensure_display_object(ds, screen.0, screen.1).ok()?;
     let (w, h) = (screen.0 as f32, screen.1 as f32);
     let rect = Rect::new(0.0, h - HEIGHT, w, HEIGHT);
     let g =
         mocu_display::publish_window(ds, display, "replay_timeline", "replay", 1000, rect).ok()?;
+    let shown = position.clone();
     mocu_display::claim_window(ds, g, move |c, _| {
-        paint(c, w, &position.lock().unwrap_or_else(|e| e.into_inner()))
+        paint(c, w, &shown.lock().unwrap_or_else(|e| e.into_inner()))
+    })
+    .ok()?;
+    let held = AtomicBool::new(false);
+    ds.publish_method_fn(g, mocu_display::pointer_spec(), move |args| {
+        let kind = args.first().and_then(|v| v.as_str()).unwrap_or("");
+        let button = args.get(1).and_then(|v| v.as_i64()).unwrap_or(-1);
+        let x = args.get(2).and_then(|v| v.as_f64()).unwrap_or(0.0) as f32;
+        let seek = match (kind, button) {
+            ("down", 0) => {
+                held.store(true, Ordering::Relaxed);
+                true
+            }
+            ("move", _) => held.load(Ordering::Relaxed),
+            ("up" | "leave", _) => {
+                held.store(false, Ordering::Relaxed);
+                false
+            }
+            _ => false,
+        };
+        if seek {
+            let length = position.lock().unwrap_or_else(|e| e.into_inner()).length;
+            let _ = controls.send(Control::Seek(time_at(x, w, length)));
+        }
+        CallOutcome::Accepted(vec![])
     })
     .ok()?;
     Some(g)
 }
 
+/// The timeline's bar in a strip `w` pixels wide (strip-local).
+fn bar(w: f32) -> Rect {
+    Rect::new(150.0, HEIGHT / 2.0 - 3.0, (w - 300.0).max(10.0), 6.0)
+}
+
+/// The trial time under `x` (strip-local) on the bar of a strip `w` wide, for a trial
+/// `length` seconds long: the bar's ends outside it.
+pub fn time_at(x: f32, w: f32, length: f64) -> f64 {
+    let b = bar(w);
+    (f64::from((x - b.x) / b.w)).clamp(0.0, 1.0) * length
+}
+
 fn paint(c: &mut dyn Canvas, w: f32, p: &Position) {
     c.fill_rect(Rect::new(0.0, 0.0, w, HEIGHT), Color::rgba(12, 16, 24, 230));
-    let bar = Rect::new(150.0, HEIGHT / 2.0 - 3.0, (w - 300.0).max(10.0), 6.0);
+    let bar = bar(w);
     c.fill_rect(bar, Color::rgb(70, 78, 92));
     let done = if p.length > 0.0 { (p.secs / p.length).clamp(0.0, 1.0) as f32 } else { 0.0 };
     c.fill_rect(Rect::new(bar.x, bar.y, bar.w * done, bar.h), Color::rgb(56, 189, 248));
@@ -121,6 +168,35 @@ mod tests {
             assert_eq!(outcome, CallOutcome::Accepted(vec![]));
         }
         assert_eq!(rx.try_iter().collect::<Vec<_>>(), vec![Control::PlayPause, Control::Faster]);
+    }
+
+    #[test]
+    fn a_press_on_the_timeline_seeks_there_and_a_drag_scrubs() {
+        use mocu_display::{Clock, Display, DisplayOptions, PointerEvent};
+        let (w, h) = (800u32, 600u32);
+        let ds = DataServer::default();
+        let opts = DisplayOptions::new(w, h).clock(Clock::manual());
+        let mut d = Display::new(&ds, opts).expect("a headless display");
+        let (tx, rx) = crossbeam_channel::unbounded();
+        let position = Arc::new(Mutex::new(Position { length: 60.0, ..Position::default() }));
+        strip(&ds, (w, h), position, tx).expect("the strip");
+        ds.quiesce();
+        d.frame();
+        // The bar runs from x 150 to 650 of an 800-wide strip; the strip is the screen's
+        // bottom 28 pixels.
+        let y = h as f32 - HEIGHT / 2.0;
+        d.pointer(400.0, y, PointerEvent::Down(0));
+        d.pointer(525.0, y, PointerEvent::Move);
+        d.pointer(525.0, y, PointerEvent::Up(0));
+        d.pointer(275.0, y, PointerEvent::Move);
+        d.pointer(20.0, y, PointerEvent::Down(0));
+        d.pointer(20.0, y, PointerEvent::Up(0));
+        d.pointer(700.0, y, PointerEvent::Down(1));
+        ds.quiesce();
+        let got: Vec<_> = rx.try_iter().collect();
+        // A press at the middle, a drag to three quarters, nothing after the release, the
+        // bar's start left of it, and no seek from the right button.
+        assert_eq!(got, vec![Control::Seek(30.0), Control::Seek(45.0), Control::Seek(0.0)]);
     }
 
     #[test]

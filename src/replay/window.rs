@@ -25,7 +25,7 @@ pub fn run(player: &mut Player, args: &ReplayArgs, screen: (u32, u32)) -> Option
         playing: true,
         ..Position::default()
     }));
-    let strip = timeline::strip(&ds, screen, position.clone());
+    let strip = timeline::strip(&ds, screen, position.clone(), tx.clone());
     let begin = args.from.map_or(player.start_ns(), |f| player.at_secs(f));
     let stop_at = args.to.map_or(player.end_ns(), |t| player.at_secs(t));
     if let Err(e) = player.seek(begin) {
@@ -126,6 +126,7 @@ fn drive(
             }
             Some(Control::Start) => player.seek(player.start_ns()),
             Some(Control::End) => player.seek(stop_at),
+            Some(Control::Seek(secs)) => player.seek(player.at_secs(secs).min(stop_at)),
             None if playing => {
                 let d = (elapsed.as_nanos() as f64 * speed) as u64;
                 player.advance_to(player.now_ns().saturating_add(d).min(stop_at))
