@@ -9,6 +9,7 @@
 //! One thread does the Zenoh side of both, so no DataServer worker or Zenoh task ever
 //! blocks on the other.
 
+use crate::arbiter::Screen;
 use crate::keys::{self, Key};
 use crate::payload;
 use crossbeam_channel::{Receiver, Sender};
@@ -41,6 +42,8 @@ pub(crate) struct Calls {
     pub share: Vec<Vec<String>>,
     pub timeout: Duration,
     pub tx: Sender<CallJob>,
+    /// Control arbitration of the vehicles served here (`arbiter.rs`), if on.
+    pub arbiter: Option<crate::arbiter::Arbiter>,
 }
 
 impl Calls {
@@ -85,6 +88,21 @@ impl Calls {
             .map(|m| m.defaults);
         let Some(mut options) = defaults else { return reply_now(q, CallOutcome::NoSuchMethod) };
         let t = req.timeout_ms.map_or(self.timeout, Duration::from_millis);
+        if let Some(a) = &self.arbiter {
+            let who = crate::control::Caller::new(
+                req.operator.as_deref().unwrap_or(""),
+                req.site.as_deref().unwrap_or(""),
+            );
+            match a.screen(&path, &method, &who) {
+                Screen::Pass => {}
+                Screen::Refuse(reason) => return reply_now(q, CallOutcome::Refused(reason)),
+                Screen::Arbitrate(vehicle) => {
+                    let tx = self.tx.clone();
+                    let answer = Box::new(move |o| drop(tx.send(CallJob::Answer(q, o))));
+                    return a.arbitrate(&vehicle, &method, &req.args, who, Some(t), answer);
+                }
+            }
+        }
         options.timeout = Some(options.timeout.map_or(t, |d| d.min(t)));
         let tx = self.tx.clone();
         self.ds.call(guid, method.as_str(), req.args, Some(options), move |o| {
@@ -96,7 +114,7 @@ impl Calls {
         let t = self.timeout;
         let slot = Arc::new(Mutex::new(Some(responder)));
         let guard = Unanswered { slot: slot.clone(), started: Instant::now(), timeout: t };
-        let body = payload::call(&args, t.as_millis() as u64, &self.operator);
+        let body = payload::call(&args, t.as_millis() as u64, &self.operator, &self.me);
         let sent = self
             .session
             .get(&key)

@@ -14,7 +14,9 @@
 
 #![forbid(unsafe_code)]
 
+pub mod arbiter;
 mod calls;
+pub mod control;
 pub mod keys;
 mod mirror;
 mod module;
@@ -54,6 +56,8 @@ pub struct Config {
     pub call_timeout: Duration,
     /// How long a peer may stay silent before it is taken as gone (Zenoh's link lease).
     pub lease: Duration,
+    /// Control arbitration of the shared `vehicles` (`arbiter.rs`); `None`: off.
+    pub control: Option<arbiter::Settings>,
 }
 
 impl Default for Config {
@@ -66,6 +70,7 @@ impl Default for Config {
             share: Vec::new(),
             call_timeout: Duration::from_secs(10),
             lease: Duration::from_millis(2000),
+            control: None,
         }
     }
 }
@@ -113,6 +118,8 @@ pub struct Distrib {
     joined: Arc<mirror::Joined>,
     pub publish_stats: Arc<PubStats>,
     pub mirror_stats: Arc<MirrorStats>,
+    /// Control arbitration, where this site arbitrates its vehicles.
+    pub arbiter: Option<arbiter::Arbiter>,
     _token: zenoh::liveliness::LivelinessToken,
 }
 
@@ -151,6 +158,17 @@ impl Distrib {
         };
         let zerr = |e: zenoh::Error| format!("zenoh: {e}");
 
+        // Control arbitration of the vehicles shared here (docs/distribution.md).
+        let arbiter = match &config.control {
+            Some(settings) if share.iter().any(|s| s.first().is_some_and(|f| f == "vehicles")) => {
+                let me = control::Caller::new(&config.operator, &site);
+                let a = arbiter::Arbiter::start(ds, settings.clone(), me)?;
+                a.watch_sites(&session)?;
+                Some(a)
+            }
+            _ => None,
+        };
+
         // Calls: served here, forwarded from mirrored methods.
         let (calls_tx, calls_rx) = unbounded();
         let c = calls::Calls {
@@ -161,6 +179,7 @@ impl Distrib {
             share: share.clone(),
             timeout: config.call_timeout,
             tx: calls_tx.clone(),
+            arbiter: arbiter.clone(),
         };
         threads.push(spawn("calls", Box::new(move || c.run(calls_rx)))?);
         let tx = calls_tx.clone();
@@ -255,6 +274,7 @@ impl Distrib {
             joined,
             publish_stats,
             mirror_stats,
+            arbiter,
             _token: token,
         })
     }
@@ -292,6 +312,9 @@ impl Distrib {
             return;
         }
         let _ = self.session.close().wait();
+        if let Some(a) = &self.arbiter {
+            a.stop();
+        }
         self.feed_waker.wake();
         let _ = self.inbound.send(mirror::Inbound::Stop);
         let _ = self.calls.send(calls::CallJob::Stop);

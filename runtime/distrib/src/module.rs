@@ -13,7 +13,7 @@ pub fn register(registry: &mut Registry) {
     });
 }
 
-fn names(spec: &ModuleSpec, key: &str) -> Result<Vec<String>, String> {
+pub(crate) fn names(spec: &ModuleSpec, key: &str) -> Result<Vec<String>, String> {
     match spec.settings.get(key) {
         None => Ok(Vec::new()),
         Some(toml::Value::Array(xs)) => xs
@@ -27,7 +27,7 @@ fn names(spec: &ModuleSpec, key: &str) -> Result<Vec<String>, String> {
     }
 }
 
-fn millis(spec: &ModuleSpec, key: &str, default: i64) -> Result<Duration, String> {
+pub(crate) fn millis(spec: &ModuleSpec, key: &str, default: i64) -> Result<Duration, String> {
     let ms = spec.i64_or(key, default).map_err(|e| e.to_string())?;
     if !(1..=3_600_000).contains(&ms) {
         return Err(format!("`{key}` must be 1 to 3600000 ms"));
@@ -47,12 +47,14 @@ pub fn config_from(spec: &ModuleSpec) -> Result<(Config, Duration), String> {
     } else {
         d.site
     };
+    let share = names(spec, "share")?;
     let config = Config {
         site,
         operator,
         listen: names(spec, "listen")?,
         connect: names(spec, "connect")?,
-        share: names(spec, "share")?,
+        control: crate::arbiter::settings_from(spec, &share)?,
+        share,
         call_timeout: millis(spec, "call_timeout_ms", 10_000)?,
         lease: millis(spec, "lease_ms", 2_000)?,
     };

@@ -233,9 +233,10 @@ pub fn property_from(bytes: &[u8]) -> Result<(Value, Option<PropMeta>), Malforme
     Ok((v, m))
 }
 
-/// A call's query payload: `{"args": [typed…], "timeout_ms": N, "operator": NAME}`.
-pub fn call(args: &[Value], timeout_ms: u64, operator: &str) -> Vec<u8> {
-    json!({"args": values(args), "timeout_ms": timeout_ms, "operator": operator})
+/// A call's query payload: `{"args": [typed…], "timeout_ms": N, "operator": NAME,
+/// "site": SITE}` (operator and site: the calling process's, for control arbitration).
+pub fn call(args: &[Value], timeout_ms: u64, operator: &str, site: &str) -> Vec<u8> {
+    json!({"args": values(args), "timeout_ms": timeout_ms, "operator": operator, "site": site})
         .to_string()
         .into_bytes()
 }
@@ -244,17 +245,19 @@ pub struct CallRequest {
     pub args: Vec<Value>,
     pub timeout_ms: Option<u64>,
     pub operator: Option<String>,
+    pub site: Option<String>,
 }
 
 pub fn call_from(bytes: &[u8]) -> Result<CallRequest, Malformed> {
     if bytes.is_empty() {
-        return Ok(CallRequest { args: Vec::new(), timeout_ms: None, operator: None });
+        return Ok(CallRequest { args: Vec::new(), timeout_ms: None, operator: None, site: None });
     }
     let j = parse(bytes)?;
     Ok(CallRequest {
         args: values_from(j.get("args"))?,
         timeout_ms: j.get("timeout_ms").and_then(J::as_u64),
         operator: j.get("operator").and_then(J::as_str).map(String::from),
+        site: j.get("site").and_then(J::as_str).map(String::from),
     })
 }
 
