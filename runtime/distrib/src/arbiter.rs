@@ -485,3 +485,7 @@ pub fn settings_from(
         ask_timeout: crate::module::millis(spec, "ask_timeout_ms", 8_000)?,
     }))
 }
+
+#[cfg(test)]
+#[path = "arbiter_tests.rs"]
+mod tests;
