@@ -9,7 +9,8 @@
    "attachments": [names],
    "channels": {topic: {"schema", "schema_encoding", "encoding", "count",
                         "monotonic": log_time never decreases,
-                        "decoded": every message decodes (JSON; CDR on /world/values),
+                        "decoded": every message decodes (JSON; CDR on /world/values
+                                   and /camera/*),
                         "first_ns", "last_ns"}},
    "values": int,              # entries in /world/values batches
    "properties": {path: [[log_time_ns, kind, value], ...]},   # for each --property PATH,
@@ -18,6 +19,8 @@
    "calls": [[path.method, op, outcome or null], ...],         # /calls, in order (an
                                                                # outcome named by its call)
    "frames": {topic: {"count", "format", "first_bytes_hex", "size", "timestamp_ns"}}}
+                               # /video/*, /image/* (format: h264, jpeg) and /camera/*
+                               # (format: rgb8, rgba8; with width and height)
 
 Usage: read_recording.py FILE.mcap [--property PATH]...
 
@@ -119,6 +122,24 @@ def take(report, schema, channel, message):
         c["monotonic"] = False
     c["last_ns"] = message.log_time
     topic = channel.topic
+    if channel.message_encoding == "cdr" and schema and schema.name == "foxglove_msgs/msg/RawImage":
+        try:
+            image = raw_image(message.data)
+        except (ValueError, struct.error, UnicodeDecodeError):
+            c["decoded"] = False
+            return
+        fr = report["frames"].setdefault(topic, {"count": 0})
+        fr["count"] += 1
+        if fr["count"] == 1:
+            fr.update(
+                format=image["encoding"],
+                width=image["width"],
+                height=image["height"],
+                first_bytes_hex=image["data"][:4].hex(),
+                size=len(image["data"]),
+                timestamp_ns=image["timestamp_ns"],
+            )
+        return
     if channel.message_encoding == "cdr":
         try:
             entries = property_values(message.data)
@@ -160,26 +181,55 @@ def take(report, schema, channel, message):
 KINDS = {0: "float", 1: "int", 2: "bool"}
 
 
+class Cdr:
+    """Little-endian CDR: alignment counted from after the 4-byte encapsulation header."""
+
+    def __init__(self, data):
+        if data[:2] != b"\x00\x01":
+            raise ValueError("not little-endian CDR")
+        self.data, self.at = data, 4
+
+    def take(self, align, n):
+        self.at += (align - (self.at - 4) % align) % align
+        if self.at + n > len(self.data):
+            raise ValueError("cut short")
+        self.at += n
+        return self.data[self.at - n : self.at]
+
+    def u32(self):
+        return struct.unpack("<I", self.take(4, 4))[0]
+
+    def string(self):
+        b = self.take(1, self.u32())
+        if not b.endswith(b"\x00"):
+            raise ValueError("a string without its NUL")
+        return b[:-1].decode("utf-8")
+
+
+def raw_image(data):
+    """A foxglove_msgs/msg/RawImage (CDR; docs/recording.md, /camera/*)."""
+    c = Cdr(data)
+    sec, nsec = c.u32(), c.u32()
+    frame_id = c.string()
+    width, height = c.u32(), c.u32()
+    encoding = c.string()
+    step = c.u32()
+    pixels = c.take(1, c.u32())
+    if step * height != len(pixels):
+        raise ValueError("rows do not add up to the data")
+    return {"timestamp_ns": sec * 1_000_000_000 + nsec, "frame_id": frame_id, "width": width,
+            "height": height, "encoding": encoding, "data": pixels}
+
+
 def property_values(data):
     """A /world/values batch (mocu_msgs/msg/PropertyValues, CDR little endian; docs/recording.md):
     [(log_time_ns, id, kind, value), ...]."""
-    if data[:2] != b"\x00\x01":
-        raise ValueError("not little-endian CDR")
-    at = 4
-
-    def take(align, n):
-        nonlocal at
-        at += (align - (at - 4) % align) % align
-        if at + n > len(data):
-            raise ValueError("cut short")
-        at += n
-        return data[at - n : at]
-
-    first_seq, first_ns = struct.unpack("<QQ", take(8, 16))
+    c = Cdr(data)
+    first_seq, first_ns = struct.unpack("<QQ", c.take(8, 16))
     cols = []
     for fmt, size in (("I", 4), ("I", 4), ("I", 4), ("B", 1), ("d", 8)):
-        (n,) = struct.unpack("<I", take(4, 4))
-        cols.append(struct.unpack(f"<{n}{fmt}", take(size, n * size)))
+        n = c.u32()
+        cols.append(struct.unpack(f"<{n}{fmt}", c.take(size, n * size)))
     ids, _seqs, dts, kinds, values = cols
     if not len(ids) == len(dts) == len(kinds) == len(values):
         raise ValueError("columns of different lengths")

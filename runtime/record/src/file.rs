@@ -24,8 +24,9 @@ pub(crate) struct Out {
     pub layout: u16,
     video_schema: u16,
     image_schema: u16,
+    raw_image_schema: u16,
     location_schema: u16,
-    /// Channels made on demand (`/video/…`, `/image/…`, `/location/…`) by topic.
+    /// Channels made on demand (`/video/…`, `/image/…`, `/camera/…`, `/location/…`) by topic.
     dynamic: HashMap<String, u16>,
     /// The last `log_time` written on each channel (by id).
     last: Vec<u64>,
@@ -38,6 +39,8 @@ pub(crate) struct Out {
 pub(crate) enum Dynamic {
     Video,
     Image,
+    /// `foxglove_msgs/msg/RawImage`, CDR.
+    RawImage,
     Location,
 }
 
@@ -86,6 +89,9 @@ impl Out {
                 schemas::compressed_image().as_bytes(),
             )
             .map_err(err)?;
+        let raw_image_schema = w
+            .add_schema(schemas::RAW_IMAGE.0, "ros2msg", schemas::RAW_IMAGE.1.as_bytes())
+            .map_err(err)?;
         let location_schema = w
             .add_schema("foxglove.LocationFix", "jsonschema", schemas::location_fix().as_bytes())
             .map_err(err)?;
@@ -100,6 +106,7 @@ impl Out {
             layout,
             video_schema,
             image_schema,
+            raw_image_schema,
             location_schema,
             dynamic: HashMap::new(),
             last: Vec::new(),
@@ -136,12 +143,13 @@ impl Out {
         if let Some(&id) = self.dynamic.get(topic) {
             return Ok(id);
         }
-        let schema = match kind {
-            Dynamic::Video => self.video_schema,
-            Dynamic::Image => self.image_schema,
-            Dynamic::Location => self.location_schema,
+        let (schema, encoding) = match kind {
+            Dynamic::Video => (self.video_schema, "json"),
+            Dynamic::Image => (self.image_schema, "json"),
+            Dynamic::RawImage => (self.raw_image_schema, "cdr"),
+            Dynamic::Location => (self.location_schema, "json"),
         };
-        let id = self.w.add_channel(schema, topic, "json", &BTreeMap::new()).map_err(err)?;
+        let id = self.w.add_channel(schema, topic, encoding, &BTreeMap::new()).map_err(err)?;
         self.dynamic.insert(topic.to_string(), id);
         Ok(id)
     }

@@ -11,6 +11,7 @@
 
 #![forbid(unsafe_code)]
 
+mod cdr;
 mod file;
 mod json;
 mod schemas;

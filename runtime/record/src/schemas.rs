@@ -99,6 +99,26 @@ pub(crate) fn location_fix() -> String {
     )
 }
 
+/// Foxglove's `foxglove_msgs/msg/RawImage` (`ros2msg`, its dependency after the
+/// separator line as ROS 2 bags write it): a camera's pixels as they were sent.
+pub(crate) const RAW_IMAGE: (&str, &str) = (
+    "foxglove_msgs/msg/RawImage",
+    "\
+builtin_interfaces/Time timestamp
+string frame_id
+uint32 width
+uint32 height
+string encoding
+uint32 step
+uint8[] data
+
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+",
+);
+
 #[cfg(test)]
 mod tests {
     #[test]

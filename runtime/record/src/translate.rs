@@ -13,6 +13,12 @@ const SNAPSHOT_NS: u64 = 10_000_000_000;
 /// … or after this many `/world/*` changes, whichever comes first.
 const SNAPSHOT_CHANGES: u64 = 20_000;
 
+/// The most frames a second recorded of a camera that sends pixels (the simulator's):
+/// a frame is written when at least 3/4 of this period has passed since the last one
+/// written, so a 10 fps camera is recorded whole and a faster one thinned to about this.
+pub(crate) const RAW_FPS: u64 = 10;
+const RAW_GAP_NS: u64 = 1_000_000_000 / RAW_FPS * 3 / 4;
+
 /// Methods that are not recorded: the display drawing itself, every frame (`paint`) and
 /// asking for it (`invalidate`).
 const UNRECORDED_METHODS: &[&str] = &["paint", "invalidate"];
@@ -29,6 +35,8 @@ pub(crate) struct Translator {
     skipped: HashSet<u64>,
     /// Each object's last `lat`, `lon`, `alt`.
     places: HashMap<Guid, [Option<f64>; 3]>,
+    /// When each pixel camera's last recorded frame was sent.
+    raw_last: HashMap<Guid, u64>,
     last_seq: u64,
     last_time: u64,
     snapshot_time: u64,
@@ -46,6 +54,7 @@ impl Translator {
             place_names: [PropName::new("lat"), PropName::new("lon"), PropName::new("alt")],
             skipped: HashSet::new(),
             places: HashMap::new(),
+            raw_last: HashMap::new(),
             last_seq: 0,
             last_time: start,
             snapshot_time: start,
@@ -170,6 +179,7 @@ impl Translator {
                 b.push(b'}');
                 self.world.delete(object);
                 self.places.remove(&object);
+                self.raw_last.remove(&object);
                 self.since_snapshot += 1;
                 self.out.object
             }
@@ -279,11 +289,20 @@ impl Translator {
         Ok(())
     }
 
-    /// A unit on a camera's `encoded` listener: `[data, codec, unit, arrival_us]`.
+    /// A stream message: a unit on a camera's `encoded` listener, or a frame of pixels from
+    /// a camera that has no `encoded` listener (the simulator's); others are not recorded.
     fn video(&mut self, listener: Guid, msg: &[Value], seq: u64, t: u64) -> Result<(), String> {
         let Some(l) = self.world.get(listener) else { return Ok(()) };
         if &*l.info.name != "encoded" {
-            return Ok(());
+            let decoded = l
+                .children
+                .iter()
+                .any(|&c| self.world.get(c).is_some_and(|o| &*o.info.name == "encoded"));
+            return match decoded {
+                // A network camera's frames are decoded from its units, which are recorded.
+                true => Ok(()),
+                false => self.raw_frame(listener, msg, seq, t),
+            };
         }
         let (Some(Value::Bytes(data)), Some(Value::Str(codec))) = (msg.first(), msg.get(1)) else {
             return Ok(());
@@ -314,6 +333,40 @@ impl Translator {
         b.extend_from_slice(b",\"data\":\"");
         json::base64(b, data);
         b.extend_from_slice(b"\"}");
+        self.out.write(ch, seq, t, &self.buf)?;
+        Ok(())
+    }
+
+    /// A frame of pixels, `[pixels, width, height, frame, …]` (RGB8 or RGBA8 rows), as a
+    /// `foxglove_msgs/msg/RawImage` on `/camera/<camera path>`, at most [`RAW_FPS`] a second.
+    fn raw_frame(&mut self, camera: Guid, msg: &[Value], seq: u64, t: u64) -> Result<(), String> {
+        let (Some(Value::Bytes(px)), Some(&Value::Int(w)), Some(&Value::Int(h))) =
+            (msg.first(), msg.get(1), msg.get(2))
+        else {
+            return Ok(());
+        };
+        let (Ok(w), Ok(h)) = (u32::try_from(w), u32::try_from(h)) else { return Ok(()) };
+        let pixels = w as usize * h as usize;
+        let (encoding, step) = match px.len() {
+            n if n > 0 && n == pixels * 3 => ("rgb8", w * 3),
+            n if n > 0 && n == pixels * 4 => ("rgba8", w * 4),
+            _ => return Ok(()),
+        };
+        if self.raw_last.get(&camera).is_some_and(|&last| t < last.saturating_add(RAW_GAP_NS)) {
+            return Ok(());
+        }
+        self.raw_last.insert(camera, t);
+        let path = self.world.path(camera);
+        let ch = self.out.dynamic(Dynamic::RawImage, &format!("/camera/{path}"))?;
+        self.buf.reserve(px.len() + path.len() + 64);
+        let mut c = crate::cdr::Cdr::start(&mut self.buf);
+        c.time(t);
+        c.string(&path);
+        c.u32(w);
+        c.u32(h);
+        c.string(encoding);
+        c.u32(step);
+        c.bytes(px);
         self.out.write(ch, seq, t, &self.buf)?;
         Ok(())
     }

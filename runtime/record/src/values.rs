@@ -5,6 +5,8 @@
 //! kind, value) instead of a JSON message of its own: no formatting, no record and no
 //! index entry per change.
 
+use crate::cdr::Cdr;
+
 /// The schema's name and its `ros2msg` text.
 pub(crate) const SCHEMA_NAME: &str = "mocu_msgs/msg/PropertyValues";
 pub(crate) const SCHEMA: &str = "\
@@ -89,9 +91,7 @@ impl Batch {
     pub fn encode(&mut self, out: &mut Vec<u8>) {
         out.clear();
         out.reserve(48 + self.id.len() * 21);
-        // Encapsulation: CDR, little endian. Alignment counts from after these 4 bytes.
-        out.extend_from_slice(&[0, 1, 0, 0]);
-        let mut c = Cdr(out);
+        let mut c = Cdr::start(out);
         c.u64(self.first_seq);
         c.u64(self.first_ns);
         for col in [&self.id, &self.seq, &self.dt] {
@@ -100,8 +100,7 @@ impl Batch {
                 c.0.extend_from_slice(&x.to_le_bytes());
             }
         }
-        c.len(self.kind.len());
-        c.0.extend_from_slice(&self.kind);
+        c.bytes(&self.kind);
         c.len(self.value.len());
         c.align(8);
         for &x in &self.value {
@@ -112,27 +111,6 @@ impl Batch {
         self.dt.clear();
         self.kind.clear();
         self.value.clear();
-    }
-}
-
-/// A CDR writer over a message whose 4-byte encapsulation header is written.
-struct Cdr<'a>(&'a mut Vec<u8>);
-
-impl Cdr<'_> {
-    fn align(&mut self, n: usize) {
-        let at = self.0.len() - 4;
-        let pad = (n - at % n) % n;
-        self.0.resize(self.0.len() + pad, 0);
-    }
-
-    fn u64(&mut self, x: u64) {
-        self.align(8);
-        self.0.extend_from_slice(&x.to_le_bytes());
-    }
-
-    fn len(&mut self, n: usize) {
-        self.align(4);
-        self.0.extend_from_slice(&(n as u32).to_le_bytes());
     }
 }
 

@@ -31,10 +31,47 @@ fn read(path: &std::path::Path) -> Vec<(String, u64, Json)> {
             }
             continue;
         }
-        let json = serde_json::from_slice(&m.data).unwrap();
+        let json = if topic.starts_with("/camera/") {
+            assert_eq!(m.channel.message_encoding, "cdr");
+            assert_eq!(m.channel.schema.as_ref().unwrap().name, "foxglove_msgs/msg/RawImage");
+            raw_image(&m.data)
+        } else {
+            serde_json::from_slice(&m.data).unwrap()
+        };
         out.push((topic, m.log_time - T0 * 1_000_000_000, json));
     }
     out
+}
+
+/// A `foxglove_msgs/msg/RawImage` (CDR) as JSON: its fields, the pixels as a list.
+fn raw_image(d: &[u8]) -> Json {
+    struct Cdr<'a>(&'a [u8], usize);
+    impl Cdr<'_> {
+        fn take(&mut self, align: usize, n: usize) -> &[u8] {
+            self.1 += (align - (self.1 - 4) % align) % align;
+            self.1 += n;
+            &self.0[self.1 - n..self.1]
+        }
+        fn u32(&mut self) -> u32 {
+            u32::from_le_bytes(self.take(4, 4).try_into().unwrap())
+        }
+        fn text(&mut self) -> String {
+            let n = self.u32() as usize;
+            let b = self.take(1, n);
+            assert_eq!(b.last(), Some(&0), "a CDR string ends with NUL");
+            String::from_utf8(b[..n - 1].to_vec()).unwrap()
+        }
+    }
+    assert_eq!(&d[..4], &[0, 1, 0, 0], "little-endian CDR");
+    let mut c = Cdr(d, 4);
+    let (sec, nsec) = (c.u32(), c.u32());
+    let frame_id = c.text();
+    let (width, height, encoding, step) = (c.u32(), c.u32(), c.text(), c.u32());
+    let n = c.u32() as usize;
+    let data = c.take(1, n).to_vec();
+    assert_eq!(c.1, d.len(), "nothing after the data");
+    serde_json::json!({"timestamp": {"sec": sec, "nsec": nsec}, "frame_id": frame_id,
+        "width": width, "height": height, "encoding": encoding, "step": step, "data": data})
 }
 
 /// A `mocu_msgs/msg/PropertyValues` batch (CDR, docs/recording.md), read as the doc lays it
@@ -203,7 +240,7 @@ fn a_call_and_its_outcome_are_recorded_once_each_and_paint_calls_not_at_all() {
 }
 
 #[test]
-fn video_units_are_recorded_as_received_on_foxglove_channels_and_raw_frames_are_not() {
+fn video_units_are_recorded_as_received_and_the_frames_decoded_from_them_are_not() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("t.mcap");
     let (ds, clock) = manual();
@@ -234,6 +271,43 @@ fn video_units_are_recorded_as_received_on_foxglove_channels_and_raw_frames_are_
         msgs.iter().filter(|(t, _, _)| t.starts_with("/video") || t.starts_with("/image")).count(),
         2
     );
+}
+
+#[test]
+fn a_camera_that_sends_pixels_is_recorded_as_raw_images_at_most_ten_a_second() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let cams = ds.create_object(ds.root(), ObjectInfo::new("cameras", "folder")).unwrap();
+    let drive = ds.create_listener(cams, "drive").unwrap();
+    let frame = |px: Vec<u8>, w: i64, n: i64| {
+        vec![Value::Bytes(px.into()), Value::Int(w), Value::Int(2), Value::Int(n)]
+    };
+    // 30 frames a second for 200 ms: 2×2 RGB, the first byte the frame's number.
+    for n in 0..7u8 {
+        let mut px = vec![n; 12];
+        px[1] = 200;
+        ds.send(drive, frame(px, 2, i64::from(n))).unwrap();
+        clock.advance(Duration::from_nanos(33_333_333));
+    }
+    // Not a frame: the size does not match the pixels.
+    ds.send(drive, frame(vec![0; 5], 2, 8)).unwrap();
+    rec.finish().unwrap();
+
+    let msgs = read(&file);
+    let frames = on(&msgs, "/camera/root.cameras.drive");
+    let got: Vec<(u64, u64)> =
+        frames.iter().map(|(_, t, j)| (*t / 1_000_000, j["data"][0].as_u64().unwrap())).collect();
+    // Frames 0, 3 and 6 (100 ms apart); those between are thinned out.
+    assert_eq!(got, vec![(0, 0), (99, 3), (199, 6)]);
+    let j = &frames[1].2;
+    assert_eq!((j["width"].as_u64(), j["height"].as_u64()), (Some(2), Some(2)));
+    assert_eq!((j["encoding"].as_str(), j["step"].as_u64()), (Some("rgb8"), Some(6)));
+    assert_eq!(j["frame_id"], "root.cameras.drive");
+    assert_eq!(j["data"].as_array().unwrap().len(), 12);
+    assert_eq!(j["data"][1], 200);
+    assert_eq!(j["timestamp"], serde_json::json!({"sec": T0, "nsec": 99_999_999}));
 }
 
 #[test]

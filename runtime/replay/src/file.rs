@@ -114,6 +114,15 @@ impl Recording {
         self.span
     }
 
+    /// The topics that start with `prefix`, in order.
+    pub fn topics_starting(&self, prefix: &str) -> Vec<Arc<str>> {
+        let mut t: Vec<Arc<str>> =
+            self.topics.values().filter(|t| t.starts_with(prefix)).cloned().collect();
+        t.sort();
+        t.dedup();
+        t
+    }
+
     /// Whether the file had its summary (else it was read linearly: a killed recorder).
     pub fn indexed(&self) -> bool {
         self.summary.is_some()

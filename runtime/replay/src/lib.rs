@@ -8,6 +8,8 @@
 //! - [`World`] applies `/world/object` and `/world/property` messages and `/world/snapshot`
 //!   keyframes, mapping the recording's GUIDs to the new server's. The recorded
 //!   `root.display` is left out: the layout being replayed draws its own.
+//! - Frames of cameras that send pixels (`/camera/…`) are sent again on the replayed
+//!   camera's listener at their times, so video windows show them as they showed live.
 //! - [`Player`] is the timeline: `seek` (the last keyframe before the time, then the changes
 //!   after it), `advance_to` (each change at its own time, timers firing in order between
 //!   them, `DataServer::advance_settled`), so the same recording gives the same world at the
@@ -25,7 +27,9 @@ mod value;
 mod world;
 
 pub use file::{Meta, RawMessage, Recording, ReplayError};
-pub use message::{ObjectChange, PropertyChange, Snapshot, SnapshotObject, ValueEntry, values};
+pub use message::{
+    Frame, ObjectChange, PropertyChange, Snapshot, SnapshotObject, ValueEntry, values,
+};
 pub use player::Player;
 pub use world::World;
 
@@ -35,4 +39,6 @@ pub mod topics {
     pub const PROPERTY: &str = "/world/property";
     pub const SNAPSHOT: &str = "/world/snapshot";
     pub const VALUES: &str = "/world/values";
+    /// Frames of cameras that send pixels: `/camera/<camera path>`.
+    pub const CAMERA_PREFIX: &str = "/camera/";
 }

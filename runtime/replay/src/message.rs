@@ -72,6 +72,51 @@ impl<'a> Cdr<'a> {
         let n = self.u32()? as usize;
         self.take(size, n.checked_mul(size)?)
     }
+
+    /// A string (its length counts the terminating NUL).
+    fn string(&mut self) -> Option<&'a str> {
+        let b = self.seq(1)?;
+        std::str::from_utf8(b.strip_suffix(&[0])?).ok()
+    }
+}
+
+/// A frame of a camera that sends pixels (`/camera/…`, `foxglove_msgs/msg/RawImage` in
+/// CDR): its camera's path (`frame_id`), size and pixels, RGB8 or RGBA8 rows as sent.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    pub camera: String,
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<u8>,
+}
+
+impl Frame {
+    /// `None` when malformed, or in an encoding other than `rgb8`/`rgba8` with rows
+    /// packed (`step` = width × channels).
+    pub fn parse(data: &[u8]) -> Option<Frame> {
+        if data.get(..2)? != [0, 1] {
+            return None;
+        }
+        let mut c = Cdr { data, at: 4 };
+        let (_sec, _nsec) = (c.u32()?, c.u32()?);
+        let camera = c.string()?.to_string();
+        let (width, height) = (c.u32()?, c.u32()?);
+        let channels = match c.string()? {
+            "rgb8" => 3,
+            "rgba8" => 4,
+            _ => return None,
+        };
+        let step = c.u32()?;
+        let pixels = c.seq(1)?;
+        let row = width.checked_mul(channels)?;
+        let size = (row as usize).checked_mul(height as usize)?;
+        (step == row && pixels.len() == size && size > 0).then(|| Frame {
+            camera,
+            width,
+            height,
+            pixels: pixels.to_vec(),
+        })
+    }
 }
 
 /// A `/world/values` batch (`mocu_msgs/msg/PropertyValues`, CDR), entry by entry; `None`

@@ -4,8 +4,8 @@
 //! across a seek back).
 
 use crate::file::{RawMessage, Recording, ReplayError};
-use crate::message::{ObjectChange, PropertyChange, Snapshot, values};
-use crate::topics::{OBJECT, PROPERTY, SNAPSHOT, VALUES};
+use crate::message::{Frame, ObjectChange, PropertyChange, Snapshot, values};
+use crate::topics::{CAMERA_PREFIX, OBJECT, PROPERTY, SNAPSHOT, VALUES};
 use crate::world::World;
 use mocu_dataserver::{Clock, DataServer, ManualClock, Value};
 use std::collections::{HashMap, VecDeque};
@@ -29,6 +29,10 @@ pub struct Player {
     loaded_to: u64,
     /// The clock's instant that stands for log time `anchor.1` (moved at each seek).
     anchor: (Instant, u64),
+    /// The topics played: the world's, then each camera's (`/camera/…`).
+    topics: Vec<Arc<str>>,
+    /// Frames sent per camera path (the frame number of the next).
+    frames: HashMap<String, i64>,
 }
 
 impl Player {
@@ -41,7 +45,11 @@ impl Player {
         let before = start.saturating_sub(1);
         clock.set_wall(UNIX_EPOCH + Duration::from_nanos(before));
         let world = World::new(&ds);
+        let mut topics: Vec<Arc<str>> = [OBJECT, PROPERTY, VALUES].map(Arc::from).to_vec();
+        topics.extend(rec.topics_starting(CAMERA_PREFIX));
         Ok(Player {
+            topics,
+            frames: HashMap::new(),
             rec,
             world,
             cursor: before,
@@ -160,7 +168,41 @@ impl Player {
         self.anchor = (self.clock.now(), to);
         self.clock.set_wall(UNIX_EPOCH + Duration::from_nanos(to));
         self.ds.advance_settled(&self.clock, self.clock.now());
+        self.show_last_frames(to)?;
         Ok(())
+    }
+
+    /// After a seek: each camera's last frame of the second before `to`, as its window
+    /// showed it then.
+    fn show_last_frames(&mut self, to: u64) -> Result<(), ReplayError> {
+        let cameras: Vec<Arc<str>> =
+            self.topics.iter().filter(|t| t.starts_with(CAMERA_PREFIX)).cloned().collect();
+        for topic in cameras {
+            if let Some(m) = self.rec.last_at_or_before(&topic, to)?
+                && m.log_time.saturating_add(READ_AHEAD) > to
+            {
+                self.send_frame(&m.data);
+            }
+        }
+        self.ds.quiesce();
+        Ok(())
+    }
+
+    /// Sends a recorded frame on its camera's listener: `[pixels, width, height, frame]`,
+    /// as the camera sent it.
+    fn send_frame(&mut self, data: &[u8]) {
+        let Some(f) = Frame::parse(data) else { return };
+        let path: Vec<&str> = f.camera.split('.').skip(1).collect();
+        let Some(camera) = self.ds.resolve(&path) else { return };
+        let n = self.frames.entry(f.camera.clone()).or_insert(0);
+        *n += 1;
+        let msg = vec![
+            Value::Bytes(f.pixels.into()),
+            Value::Int(i64::from(f.width)),
+            Value::Int(i64::from(f.height)),
+            Value::Int(*n),
+        ];
+        let _ = self.ds.send(camera, msg);
     }
 
     /// Plays forward to log time `to`: each change at its recorded time, the timers due
@@ -175,8 +217,8 @@ impl Player {
             let ready = |i: &Item| i.key().0 <= self.loaded_to;
             if self.loaded_to < to && !self.ahead.front().is_some_and(ready) {
                 let hi = self.loaded_to.saturating_add(READ_AHEAD);
-                let msgs =
-                    self.rec.messages(self.loaded_to + 1, hi, &[OBJECT, PROPERTY, VALUES])?;
+                let topics: Vec<&str> = self.topics.iter().map(|t| &**t).collect();
+                let msgs = self.rec.messages(self.loaded_to + 1, hi, &topics)?;
                 let mut items: Vec<Item> = self.ahead.drain(..).collect();
                 items.extend(expand(msgs));
                 items.sort_by_key(Item::key);
@@ -237,6 +279,7 @@ impl Player {
                     self.world.apply_property(&c);
                 }
             }
+            t if t.starts_with(CAMERA_PREFIX) => self.send_frame(&m.data),
             _ => {}
         }
     }

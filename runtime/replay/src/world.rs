@@ -1,9 +1,13 @@
 //! Applies recorded world-model changes to a DataServer: the recording's GUIDs mapped to
 //! the new server's, the recorded `root.display` left out (the replayed layout draws its
-//! own), and keyframes synchronised in (what the keyframe lacks is deleted).
+//! own), listeners made listeners again (their receivers left out: the replay's modules
+//! join them themselves), and keyframes synchronised in (what the keyframe lacks is
+//! deleted).
 
 use crate::message::{ObjectChange, PropertyChange, Snapshot};
-use mocu_dataserver::{DataServer, Guid, ObjectInfo, PropMeta, PropName, Value};
+use mocu_dataserver::{
+    DataServer, Guid, LISTENER_TYPE, ObjectInfo, PropMeta, PropName, RECEIVER_TYPE, Value,
+};
 use std::collections::{HashMap, HashSet};
 
 /// The root's GUID in every recording.
@@ -146,8 +150,10 @@ impl World {
         {
             return Some(g);
         }
-        let left_out =
-            self.skipped.contains(&parent) || (parent == ROOT && &*info.name == "display");
+        // A receiver is a listener's join: the replay's own modules join what they show.
+        let left_out = self.skipped.contains(&parent)
+            || (parent == ROOT && &*info.name == "display")
+            || &*info.kind == RECEIVER_TYPE;
         let p = self.object(parent).filter(|_| !left_out);
         let Some(p) = p else {
             self.skipped.insert(guid);
@@ -157,6 +163,8 @@ impl World {
         let taken: HashSet<Guid> = self.map.values().copied().collect();
         let g = match found.filter(|f| !taken.contains(f)) {
             Some(f) => f,
+            // A listener, so that recorded frames can be sent on it again.
+            None if &*info.kind == LISTENER_TYPE => self.ds.create_listener(p, &info.name).ok()?,
             None => self.ds.create_object_at(p, index, info.clone()).ok()?,
         };
         self.map.insert(guid, g);

@@ -9,7 +9,7 @@
 //! `cargo test --benches` each runs once and the summary is one second long. Needs ffmpeg
 //! (Debian `ffmpeg`) to encode the camera's frames once at start.
 
-#[path = "../runtime/video/tests/peer/mod.rs"]
+#[path = "../../video/tests/peer/mod.rs"]
 mod peer;
 
 use cpu_time::ProcessTime;
