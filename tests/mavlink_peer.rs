@@ -112,8 +112,9 @@ fn call(ds: &DataServer, g: Guid, m: &str, args: Vec<Value>) -> CallOutcome {
     ds.call_wait(g, m, args, None)
 }
 
-#[test]
-fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
+/// The MAVLink module on a loopback port, and a pymavlink vehicle of system id `sysid` sending
+/// to it.
+fn connect(sysid: u8) -> (DataServer, ModuleHost, Peer) {
     let ds = DataServer::default();
     let mut reg = Registry::new();
     mocu_mavlink::register(&mut reg);
@@ -126,7 +127,14 @@ fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
     let status = ds.resolve(&["modules", "mavlink"]).unwrap();
     let addr = ds.get(status, "address").unwrap();
     let port: u16 = addr.as_str().unwrap().rsplit(':').next().unwrap().parse().unwrap();
-    let mut peer = Peer::start(port, 7);
+    let peer = Peer::start(port, sysid);
+    (ds, host, peer)
+}
+
+#[test]
+fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
+    let (ds, mut host, mut peer) = connect(7);
+    let status = ds.resolve(&["modules", "mavlink"]).unwrap();
 
     // Discovery by HEARTBEAT.
     let vehicles = ds.resolve(&["vehicles"]).unwrap();
@@ -241,6 +249,94 @@ fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
         (ds.get(v, "link_lost").ok()? == Value::Bool(false)).then_some(())
     });
     assert_eq!(ds.get(v, "stale").unwrap(), Value::Bool(false));
+    peer.tell("quit");
+    host.stop_all();
+}
+
+/// A waypoint's latitude moved as the map moves it (a change of that waypoint only).
+fn move_lat(ds: &DataServer, route: Guid, index: usize, lat: f64) {
+    let wp = mocu_host::world::route_waypoints(ds, route)[index];
+    ds.set(wp, "lat", Value::Float(lat)).unwrap();
+}
+
+/// The peer's `partial_item` lines as (seq, lat).
+fn partial_items(peer: &Peer, n: usize) -> Vec<(u16, f64)> {
+    peer.said_n("partial_item ", n)
+        .iter()
+        .map(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            (w[1].parse().unwrap(), w[2].parse().unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn an_uploaded_route_edited_in_the_world_model_sends_only_the_changed_waypoints() {
+    let (ds, mut host, mut peer) = connect(8);
+    let vehicles = ds.resolve(&["vehicles"]).unwrap();
+    let v = wait_for(&ds, &[Topic::children(vehicles)], "mav8 to be discovered", || {
+        ds.resolve(&["vehicles", "mav8"])
+    });
+    wait_for(&ds, &[Topic::properties(v)], "the vehicle's address verified", || {
+        (ds.get(v, "verified").ok()? == Value::Bool(true)).then_some(())
+    });
+    let routes = ds.resolve(&["vehicles", "mav8", "routes"]).unwrap();
+    let route = match call(&ds, routes, "create_route", vec![Value::str("survey")]) {
+        CallOutcome::Accepted(r) => r[0].as_guid().unwrap(),
+        other => panic!("create_route: {other:?}"),
+    };
+    for i in 0..4 {
+        let at =
+            vec![Value::Int(i), Value::Float(32.716 + 0.001 * i as f64), Value::Float(-117.16)];
+        assert!(call(&ds, route, "insert_waypoint", at).is_accepted());
+    }
+    let uploaded = call(&ds, v, "upload_route", vec![Value::Guid(route)]);
+    assert_eq!(uploaded, CallOutcome::Accepted(vec![Value::Int(4)]));
+    assert_eq!(peer.said_n("mission_item ", 4).len(), 4);
+    assert_eq!(ds.get(v, "route").unwrap(), Value::Guid(route));
+    let synced = || {
+        wait_for(&ds, &[Topic::properties(v)], "the route synced", || {
+            (ds.get(v, "route_synced").ok()? == Value::Bool(true)).then_some(())
+        })
+    };
+    synced();
+
+    // One waypoint moved: a partial write of that item alone.
+    move_lat(&ds, route, 2, 32.7251);
+    assert_eq!(peer.said_n("partial ", 1), ["partial 2 2"]);
+    assert_eq!(partial_items(&peer, 1), [(2, 32.7251)]);
+    synced();
+    // Two waypoints apart: one partial write each, never the unchanged ones between them.
+    move_lat(&ds, route, 0, 32.7102);
+    move_lat(&ds, route, 3, 32.7303);
+    assert_eq!(peer.said_n("partial ", 3), ["partial 2 2", "partial 0 0", "partial 3 3"]);
+    assert_eq!(partial_items(&peer, 3), [(2, 32.7251), (0, 32.7102), (3, 32.7303)]);
+    synced();
+    // A waypoint inserted changes the count: the protocol has no insert, the whole route goes.
+    let at = vec![Value::Int(1), Value::Float(32.7111), Value::Float(-117.161)];
+    assert!(call(&ds, route, "insert_waypoint", at).is_accepted());
+    assert_eq!(peer.said_n("mission ", 2), ["mission 4", "mission 5"]);
+    assert_eq!(peer.said_n("mission_item ", 9).len(), 9);
+    synced();
+
+    // A vehicle that refuses partial writes gets the whole route, and from then on only that.
+    peer.tell("refuse_partial");
+    peer.said_n("refusing partial writes", 1);
+    move_lat(&ds, route, 4, 32.7404);
+    assert_eq!(peer.said_n("partial_refused ", 1), ["partial_refused 4 4"]);
+    assert_eq!(peer.said_n("mission ", 3), ["mission 4", "mission 5", "mission 5"]);
+    let items = peer.said_n("mission_item ", 14);
+    assert!(items[13].starts_with("mission_item 4 32.7404"), "{items:?}");
+    synced();
+    move_lat(&ds, route, 1, 32.7122);
+    assert_eq!(peer.said_n("mission ", 4).len(), 4);
+    let items = peer.said_n("mission_item ", 19);
+    assert!(items[15].starts_with("mission_item 1 32.7122"), "{items:?}");
+    synced();
+    // Everything the vehicle was sent, counted once the last upload is done.
+    assert_eq!(peer.said_n("partial ", 0).len(), 3);
+    assert_eq!(peer.said_n("partial_item ", 0).len(), 3);
+    assert_eq!(peer.said_n("partial_refused ", 0).len(), 1);
     peer.tell("quit");
     host.stop_all();
 }

@@ -10,9 +10,14 @@ Behaviour the tests rely on:
   * land (21): refused with MAV_RESULT_DENIED.
   * other commands: MAV_RESULT_UNSUPPORTED.
   * at start: one garbage datagram and one frame with an unknown message id.
+  * MISSION_WRITE_PARTIAL_LIST: the items start..=end asked for and written over the
+    mission held (a range outside it: MAV_MISSION_INVALID_SEQUENCE).
+  * stdin line "refuse_partial": from then on a partial write is refused with
+    MAV_MISSION_UNSUPPORTED (an autopilot without partial writes).
   * stdin line "silence S": send nothing for S seconds (link loss), then resume.
   * stdin line "quit" (or EOF): exit.
-Prints "ready", "mission N", "mission_item SEQ LAT LON ALT" lines on stdout.
+Prints "ready", "mission N", "mission_item SEQ LAT LON ALT", "partial START END",
+"partial_item SEQ LAT LON ALT", "partial_refused START END" lines on stdout.
 """
 import argparse
 import os
@@ -34,7 +39,7 @@ conn = mavutil.mavlink_connection(
     f"udpout:127.0.0.1:{args.port}", source_system=args.sysid, source_component=1, dialect="common"
 )
 
-state = {"armed": False, "mode": 0, "silent_until": 0.0, "quit": False}
+state = {"armed": False, "mode": 0, "silent_until": 0.0, "quit": False, "refuse_partial": False}
 lock = threading.Lock()
 
 
@@ -51,6 +56,9 @@ def stdin_commands():
             with lock:
                 state["silent_until"] = time.time() + float(words[1])
             say("silenced", words[1])
+        elif words[0] == "refuse_partial":
+            state["refuse_partial"] = True
+            say("refusing partial writes")
         elif words[0] == "quit":
             break
     state["quit"] = True
@@ -64,6 +72,8 @@ unknown = bytes([0xFD, 3, 0, 0, 0, args.sysid, 1, 0x99, 0x99, 0x00, 1, 2, 3, 0x1
 conn.write(unknown)
 
 mission = {"count": 0, "next": 0, "items": []}
+# A partial write under way: the next item asked for and the last of the range.
+partial = None
 t0 = time.time()
 next_slow = 0.0
 next_fast = 0.0
@@ -114,9 +124,34 @@ while not state["quit"]:
         say("command", cmd, result)
         conn.mav.command_ack_send(cmd, result)
     elif t == "MISSION_COUNT":
+        partial = None
         mission = {"count": msg.count, "next": 0, "items": []}
         say("mission", msg.count)
         conn.mav.mission_request_int_send(msg.get_srcSystem(), msg.get_srcComponent(), 0)
+    elif t == "MISSION_WRITE_PARTIAL_LIST":
+        src, comp = msg.get_srcSystem(), msg.get_srcComponent()
+        start, end = msg.start_index, msg.end_index
+        if state["refuse_partial"]:
+            say("partial_refused", start, end)
+            conn.mav.mission_ack_send(src, comp, m.MAV_MISSION_UNSUPPORTED)
+        elif not (0 <= start <= end < len(mission["items"])):
+            say("partial_invalid", start, end)
+            conn.mav.mission_ack_send(src, comp, m.MAV_MISSION_INVALID_SEQUENCE)
+        else:
+            partial = {"next": start, "end": end}
+            say("partial", start, end)
+            conn.mav.mission_request_int_send(src, comp, start)
+    elif t == "MISSION_ITEM_INT" and partial is not None:
+        src, comp = msg.get_srcSystem(), msg.get_srcComponent()
+        if msg.seq == partial["next"]:
+            mission["items"][msg.seq] = msg
+            say("partial_item", msg.seq, msg.x / 1e7, msg.y / 1e7, msg.z)
+            partial["next"] += 1
+        if partial["next"] <= partial["end"]:
+            conn.mav.mission_request_int_send(src, comp, partial["next"])
+        else:
+            partial = None
+            conn.mav.mission_ack_send(src, comp, m.MAV_MISSION_ACCEPTED)
     elif t == "MISSION_ITEM_INT":
         if msg.seq == mission["next"]:
             mission["items"].append(msg)

@@ -3,13 +3,14 @@
 //! with units; methods (`arm`, `set_mode`, `goto`, `return_home`, `land`, `upload_route`)
 //! become COMMAND_LONG/COMMAND_INT or the mission protocol, and the vehicle's COMMAND_ACK /
 //! MISSION_ACK becomes the call's outcome (Accepted, Refused with the result's name, Failed,
-//! or TimedOut after retries). Three seconds without a heartbeat mark the link lost and the
-//! data stale until heartbeats return. Malformed and unknown packets are counted, never
-//! fatal; enum values newer than the dialect are kept as `unknown(N)`; implausible values
-//! refuse their message with a counter per reason. A link holds at most `max_vehicles`,
-//! forgets the silent ones, answers only addresses that proved to be a vehicle's, and with a
-//! `signing_key` accepts only frames signed with it and signs what it sends
-//! (docs/mavlink.md).
+//! or TimedOut after retries). An uploaded route edited in the world model is sent as
+//! deltas: partial mission writes of the changed waypoints (`mission.rs`). Three seconds
+//! without a heartbeat mark the link lost and the data stale until heartbeats return.
+//! Malformed and unknown packets are counted, never fatal; enum values newer than the
+//! dialect are kept as `unknown(N)`; implausible values refuse their message with a counter
+//! per reason. A link holds at most `max_vehicles`, forgets the silent ones, answers only
+//! addresses that proved to be a vehicle's, and with a `signing_key` accepts only frames
+//! signed with it and signs what it sends (docs/mavlink.md).
 //!
 //! One blocking reader thread per socket (I/O at the module's edge); everything else runs
 //! on the module's serial executor. No async runtime.
@@ -22,6 +23,7 @@ mod decode;
 mod lenient;
 mod link;
 mod methods;
+mod mission;
 mod modes;
 mod signing;
 mod telemetry;

@@ -53,6 +53,8 @@ pub(crate) struct Inner {
 pub(crate) struct After {
     pub replies: Vec<(Responder, CallOutcome)>,
     pub sends: Vec<(Option<SocketAddr>, MavMessage)>,
+    /// Retries to arm: (system id, upload id).
+    pub timers: Vec<(u32, u64)>,
 }
 
 impl Link {
@@ -109,6 +111,9 @@ impl Link {
         for (addr, msg) in after.sends {
             self.send_to(addr, &msg);
         }
+        for (sys, id) in after.timers {
+            self.arm_retry(sys, id);
+        }
     }
 
     fn count(&self, counts: &DecodeCounts) {
@@ -152,7 +157,8 @@ impl Link {
                 }
             }
         }
-        let Some(v) = st.vehicles.get_mut(&h.system_id) else { return };
+        let State { vehicles, next_id, .. } = st;
+        let Some(v) = vehicles.get_mut(&h.system_id) else { return };
         // Link quality from sequence gaps, smoothed.
         if h.component_id == v.compid {
             let lost = v.last_seq.map_or(0, |s| h.sequence.wrapping_sub(s.wrapping_add(1)));
@@ -176,7 +182,7 @@ impl Link {
                 if let Err(r) = self.telemetry(v, &m) {
                     self.inner.counters.refuse(r, 1);
                 }
-                self.answer(v, &m, after);
+                self.answer(v, &m, next_id, after);
             }
         }
     }
@@ -272,6 +278,7 @@ impl Link {
                 self.send_to(addr, &hb);
             }
         }
+        self.sync_routes();
         self.inner.counters.publish(ds, self.inner.ctx.status, n);
     }
 
@@ -282,8 +289,8 @@ impl Link {
         for p in v.commands {
             p.responder.reply(why());
         }
-        if let Some(up) = v.upload {
-            up.responder.reply(why());
+        if let Some(r) = v.upload.and_then(|up| up.responder) {
+            r.reply(why());
         }
         let _ = self.inner.ctx.ds.delete_object(v.guid);
         self.inner.counters.forgotten.fetch_add(1, Ordering::Relaxed);

@@ -3,9 +3,10 @@
 
 use crate::lenient::{Heartbeat, Lenient};
 use crate::link::Link;
+use crate::mission::{Mission, Upload};
 use crate::modes::{self, Family};
 use mavlink::MavHeader;
-use mavlink::dialects::common::{MISSION_ITEM_INT_DATA, MavAutopilot, MavCmd, MavMessage, MavType};
+use mavlink::dialects::common::{MavAutopilot, MavCmd, MavMessage, MavType};
 use mocu_dataserver::{DsError, Guid, ObjectInfo, Responder, Value};
 use mocu_host::world::{self, RouteFrame, boolean, float, float_in, int, string};
 use std::net::SocketAddr;
@@ -29,14 +30,6 @@ pub(crate) struct Pending {
     pub command: MavCmd,
     pub msg: MavMessage,
     pub attempts: u32,
-    pub responder: Responder,
-}
-
-pub(crate) struct Upload {
-    pub id: u64,
-    pub items: Vec<MISSION_ITEM_INT_DATA>,
-    pub attempts: u32,
-    pub requested: bool,
     pub responder: Responder,
 }
 
@@ -71,6 +64,8 @@ pub(crate) struct Vehicle {
     pub control: String,
     pub commands: Vec<Pending>,
     pub upload: Option<Upload>,
+    /// The route the vehicle holds, kept in step by deltas (`mission.rs`).
+    pub mission: Option<Mission>,
 }
 
 impl Vehicle {
@@ -224,6 +219,7 @@ impl Link {
             control: String::new(),
             commands: Vec::new(),
             upload: None,
+            mission: None,
         })
     }
 }
