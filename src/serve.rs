@@ -175,7 +175,7 @@ fn report(e: mocu_host::HostEvent) {
     }
 }
 
-/// The vehicles by name, and whether their links are up.
+/// The vehicles by name, who holds each, and whether their links are up.
 fn summary(ds: &DataServer) -> String {
     let Some(vs) = ds.resolve(&["vehicles"]) else { return "no vehicles".into() };
     let names: Vec<String> = ds
@@ -185,7 +185,15 @@ fn summary(ds: &DataServer) -> String {
         .filter_map(|v: Guid| {
             let info = ds.info(v).ok()?;
             let lost = ds.try_get(v, "link_lost".into()) == Some(Value::Bool(true));
-            Some(format!("{}{}", info.name, if lost { " LINK LOST" } else { "" }))
+            // Who holds it, when control is arbitrated here (docs/distribution.md).
+            let holder = ds
+                .find_child(v, mocu_distrib::arbiter::OBJECT)
+                .ok()
+                .flatten()
+                .and_then(|a| ds.try_get(a, "holder".into()))
+                .and_then(|h| h.as_str().filter(|h| !h.is_empty()).map(|h| format!(" ({h})")))
+                .unwrap_or_default();
+            Some(format!("{}{holder}{}", info.name, if lost { " LINK LOST" } else { "" }))
         })
         .collect();
     format!("vehicles: {}", names.join(", "))

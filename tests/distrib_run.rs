@@ -267,3 +267,77 @@ fn a_killed_adapter_shows_stale_on_the_ocu_and_its_return_brings_no_duplicates()
     }
     drop(adapter);
 }
+
+/// An OCU on tests/distrib/control.mocu against the adapter, playing `script`, until it is
+/// told to stop; it dumps `root.vehicles` when it does.
+fn control_ocu(port: u16, operator: &str, script: &str) -> Proc {
+    let ep = endpoint(port);
+    Proc::start(&[
+        "run",
+        "tests/distrib/control.mocu",
+        "--no-sim",
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+        "--headless",
+        "--no-watch",
+        "--connect",
+        &ep,
+        "--operator",
+        operator,
+        "--input-script",
+        script,
+        "--dump",
+        "root.vehicles",
+    ])
+}
+
+#[test]
+fn a_non_holders_command_is_refused_takeovers_follow_each_vehicles_policy_and_a_killed_holder_is_released()
+ {
+    let port = free_port();
+    let ep = endpoint(port);
+    let adapter = Proc::start(&[
+        "serve",
+        "tests/distrib/adapter.toml",
+        "--listen",
+        &ep,
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+    ]);
+    adapter.wait_line(0, "usv1 and usv2", |l| l.contains("vehicles: usv1, usv2"));
+    // alice requests both vehicles; the adapter says who holds them.
+    let alice = control_ocu(port, "alice", "tests/distrib/alice.script");
+    let n = adapter.wait_line(0, "alice holding both", |l| {
+        l.contains("usv1 (alice)") && l.contains("usv2 (alice)")
+    });
+    // bob's command is refused with the reason, on his screen (the alert on stderr).
+    let bob = control_ocu(port, "bob", "tests/distrib/bob.script");
+    let refused =
+        "usv1.start_engine: refused — usv1 is controlled by alice: request a takeover first";
+    let b = bob.wait_line(0, "bob's command refused", |l| l.contains(refused));
+    // usv2's takeover is denied by the adapter's profile; usv1's is allowed.
+    let denied =
+        "usv2.arbitration.takeover: refused — takeover of usv2 is denied: alice controls it";
+    bob.wait_line(b, "bob's takeover of usv2 denied", |l| l.contains(denied));
+    let n = adapter.wait_line(n, "bob holding usv1", |l| {
+        l.contains("usv1 (bob)") && l.contains("usv2 (alice)")
+    });
+    // alice's OCU is killed: usv2 is released once release_after_ms has passed.
+    drop(alice);
+    adapter
+        .wait_line(n, "usv2 released", |l| l.contains("usv1 (bob), usv2") && !l.contains("alice"));
+    // bob's world model says the same.
+    bob.signal("-TERM");
+    let (out, lines) = bob.finish();
+    let vs = vehicles(&out, &lines);
+    let holder = |name: &str| {
+        let v = &vs.iter().find(|(n, _)| n == name).unwrap().1;
+        child(v, "arbitration")["properties"]["holder"].clone()
+    };
+    assert_eq!((holder("usv1"), holder("usv2")), (J::from("bob"), J::from("")));
+    drop(adapter);
+}

@@ -30,6 +30,8 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
         ("input", "gilrs") => false.into(),
         ("input", "script") | ("video", "camera") | ("map", "tiles") => "".into(),
         ("video", "source") => "127.0.0.1".into(),
+        ("distrib", "takeover") => "ask".into(),
+        ("distrib", "free") => "closed".into(),
         ("video", "silence_ms") | ("video", "max_width" | "max_height" | "max_unit_kb") => {
             640.into()
         }
