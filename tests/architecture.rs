@@ -29,6 +29,9 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("mocu-mavlink", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     ("mocu-input", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     ("mocu-mapdata", &["mocu-value", "mocu-dataserver", "mocu-host"]),
+    // Scripts (#js:, #rhai:, script modules) reach the OCU only through the DataServer's API,
+    // as native modules do; the engines know nothing of the compiler or layouts.
+    ("mocu-script", &["mocu-value", "mocu-dataserver", "mocu-host"]),
     // Replay writes the world model from a recording, as a protocol module would.
     ("mocu-replay", &["mocu-dataserver"]),
     // The recorder reads the DataServer's change feed; it knows no layout, renderer or module.
