@@ -134,6 +134,11 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
             for s in specs.iter_mut().filter(|s| s.kind == "map") {
                 resolve_map_files(s, &dir);
             }
+            for s in specs.iter_mut().filter(|s| s.kind == "script") {
+                if let Some(toml::Value::String(f)) = s.settings.get_mut("file") {
+                    *f = dir.join(&*f).to_string_lossy().into_owned();
+                }
+            }
             Some(specs)
         }
         _ => None,
@@ -141,7 +146,8 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
     Ok(Target { bundle, modules })
 }
 
-/// The folder a profile's file settings (the map's `overlays` and `tiles`) are relative
+/// The folder a profile's file settings (the map's `overlays` and `tiles`, a script module's
+/// `file`) are relative
 /// to: the profile's own, a layout's project's, or a bundle's.
 fn profile_dir(target: &Path) -> PathBuf {
     if target.extension().is_some_and(|e| e == "mocu")
@@ -177,6 +183,7 @@ pub fn registry() -> Registry {
     mocu_input::register(&mut r);
     mocu_distrib::register(&mut r);
     mocu_mapdata::register(&mut r);
+    mocu_script::register(&mut r);
     r
 }
 

@@ -14,6 +14,7 @@ fn registry() -> Registry {
     mocu_input::register(&mut r);
     mocu_distrib::register(&mut r);
     mocu_mapdata::register(&mut r);
+    mocu_script::register(&mut r);
     r
 }
 
@@ -29,6 +30,8 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
         ("video", "feeds") => "auto".into(),
         ("input", "gilrs") => false.into(),
         ("input", "script") | ("video", "camera") | ("map", "tiles") => "".into(),
+        ("script", "file") => script_file().into(),
+        ("script", "memory_kb") => 1024.into(),
         ("video", "source") => "127.0.0.1".into(),
         ("distrib", "takeover") => "ask".into(),
         ("distrib", "free") => "closed".into(),
@@ -44,6 +47,13 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
             SettingType::Names => toml::Value::Array(vec![]),
         },
     }
+}
+
+/// A script module's file: one that runs (a script module does not start without its file).
+fn script_file() -> String {
+    let path = std::env::temp_dir().join(format!("mocu-module-settings-{}.js", std::process::id()));
+    std::fs::write(&path, "mocu.read(\"modules.t_script.kind\");").expect("temp dir writable");
+    path.display().to_string()
 }
 
 #[test]

@@ -74,7 +74,7 @@ pub const COMMON: &[Setting] = &[
         "kind",
         String,
         "the table's NAME",
-        "Which module runs: sim, mavlink, video, codec, input or map",
+        "Which module runs: sim, mavlink, video, codec, input, distrib, map or script",
     ),
     s(
         "order",
@@ -255,12 +255,7 @@ pub const MODULES: &[ModuleKind] = &[
                 "5000",
                 "How long after its site disappears a holder loses control, in ms",
             ),
-            s(
-                "ask_timeout_ms",
-                Int,
-                "8000",
-                "How long a holder has to answer a takeover, in ms",
-            ),
+            s("ask_timeout_ms", Int, "8000", "How long a holder has to answer a takeover, in ms"),
         ],
     },
     ModuleKind {
@@ -281,6 +276,26 @@ pub const MODULES: &[ModuleKind] = &[
             ),
             s("origin_lat", Number, "32.71", "Latitude of the local frame's origin, in degrees"),
             s("origin_lon", Number, "-117.24", "Longitude of the local frame's origin, in degrees"),
+        ],
+    },
+    ModuleKind {
+        kind: "script",
+        description: "A script module: a .js or .rhai file run against the DataServer (docs/scripting.md)",
+        settings: &[
+            s(
+                "file",
+                String,
+                "required",
+                "The script, relative to the profile; its extension picks the engine (.js, .rhai)",
+            ),
+            s(
+                "operations",
+                Int,
+                "1000000",
+                "Operations one run or callback may take; past them the script is stopped",
+            ),
+            s("memory_kb", Int, "16384", "Memory the script may hold, in KiB (64 to 4194304)"),
+            s("files", Bool, "false", "Grants `import` of other scripts from the script's folder"),
         ],
     },
 ];
