@@ -271,26 +271,10 @@ fn a_killed_adapter_shows_stale_on_the_ocu_and_its_return_brings_no_duplicates()
 /// An OCU on tests/distrib/control.mocu against the adapter, playing `script`, until it is
 /// told to stop; it dumps `root.vehicles` when it does.
 fn control_ocu(port: u16, operator: &str, script: &str) -> Proc {
-    let ep = endpoint(port);
-    Proc::start(&[
-        "run",
-        "tests/distrib/control.mocu",
-        "--no-sim",
-        "--mavlink",
-        "off",
-        "--video",
-        "off",
-        "--headless",
-        "--no-watch",
-        "--connect",
-        &ep,
-        "--operator",
-        operator,
-        "--input-script",
-        script,
-        "--dump",
-        "root.vehicles",
-    ])
+    let mut a = ocu_args(port, operator, None);
+    a[1] = "tests/distrib/control.mocu".into();
+    a.extend(["--input-script".into(), script.into()]);
+    Proc::start(&a.iter().map(String::as_str).collect::<Vec<_>>())
 }
 
 #[test]

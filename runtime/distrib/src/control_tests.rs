@@ -72,10 +72,12 @@ fn only_the_holder_releases_and_then_the_vehicle_is_free() {
     assert_eq!(c.release(&alice(), "usv1"), Err("alice does not control usv1".into()));
 }
 
+/// A policy, what bob's takeover returns, who holds after it, who is asking after it.
+type Case = (Takeover, Result<Grant, String>, &'static str, Option<&'static str>);
+
 #[test]
 fn a_takeover_follows_the_vehicles_policy() {
-    // (policy, what bob's takeover returns, who holds after it, who is asking after it)
-    let cases: [(Takeover, Result<Grant, String>, &str, Option<&str>); 3] = [
+    let cases: [Case; 3] = [
         (Takeover::Allowed, Ok(Grant::Granted), "bob", None),
         (
             Takeover::Denied,

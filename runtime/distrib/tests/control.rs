@@ -7,23 +7,19 @@
 
 use crossbeam_channel::{Receiver, unbounded};
 use mocu_dataserver::{
-    CallOutcome, Clock, Config as DsConfig, DataServer, DottedPath, Kind, ManualClock, MethodSpec,
-    ObjectInfo, PathEvent, PathWatch, Value,
+    CallOutcome, Clock, Config as DsConfig, DataServer, ManualClock, MethodSpec, ObjectInfo, Value,
 };
 use mocu_distrib::arbiter::Settings;
 use mocu_distrib::control::Takeover;
 use mocu_distrib::{Config, Distrib};
 use std::collections::HashMap;
-use std::net::TcpListener;
 use std::sync::Arc;
 use std::time::Duration;
 
-const PATIENCE: Duration = Duration::from_secs(20);
 const RELEASE: Duration = Duration::from_secs(5);
 
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
+mod support;
+use support::{PATIENCE, free_port, until, watch};
 
 /// The adapter: usv1, whose holder is asked for a takeover, with a `stop` method.
 fn adapter(port: u16) -> (DataServer, ManualClock, Distrib) {
@@ -59,27 +55,6 @@ fn ocu(name: &str, port: u16) -> (DataServer, Distrib) {
     let d = Distrib::start(&ds, &config, None).unwrap();
     assert!(d.wait_snapshots(1, PATIENCE), "{name}: the adapter's snapshot");
     (ds, d)
-}
-
-fn watch(ds: &DataServer, path: &str) -> (PathWatch, Receiver<PathEvent>) {
-    let (tx, rx) = unbounded();
-    let w = ds
-        .watch_path(DottedPath::parse(path).unwrap(), None, move |e| {
-            let _ = tx.send(e.clone());
-        })
-        .unwrap();
-    (w, rx)
-}
-
-fn until(rx: &Receiver<PathEvent>, what: &str, want: &Value) {
-    let mut seen = Vec::new();
-    loop {
-        match rx.recv_timeout(PATIENCE) {
-            Ok(e) if e.kind != Kind::Deleted && e.value.as_ref() == Some(want) => return,
-            Ok(e) => seen.push(e.value),
-            Err(_) => panic!("{what} never became {want:?}; saw {seen:?}"),
-        }
-    }
 }
 
 /// Calls a method of a mirrored object; the outcome arrives on the receiver.

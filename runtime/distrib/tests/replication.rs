@@ -3,21 +3,15 @@
 //! late joiner starts from a snapshot, a site that leaves shows stale. Every wait is on a
 //! condition (a path watch's events), bounded so that a failure fails instead of hanging.
 
-use crossbeam_channel::{Receiver, unbounded};
+use crossbeam_channel::unbounded;
 use mocu_dataserver::{
-    CallOutcome, DataServer, DottedPath, Kind, MethodSpec, ObjectInfo, ParamSpec, PathEvent,
-    PathWatch, PropMeta, Value, ValueKind,
+    CallOutcome, DataServer, Kind, MethodSpec, ObjectInfo, ParamSpec, PropMeta, Value, ValueKind,
 };
 use mocu_distrib::{Config, Distrib};
-use std::net::TcpListener;
 use std::time::Duration;
 
-/// Long enough for a loaded CI machine, short enough that a hang is a failure.
-const PATIENCE: Duration = Duration::from_secs(20);
-
-fn free_port() -> u16 {
-    TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port()
-}
+mod support;
+use support::{PATIENCE, free_port, until, watch};
 
 fn adapter(port: u16) -> Config {
     Config {
@@ -66,29 +60,6 @@ fn publish_vehicle(ds: &DataServer, name: &str) -> (mocu_dataserver::Guid, mocu_
     .unwrap();
     ds.publish_method_fn(v, MethodSpec::new("never"), |_| CallOutcome::TimedOut).unwrap();
     (v, nav)
-}
-
-/// The values a path takes, as they come.
-fn watch(ds: &DataServer, path: &str) -> (PathWatch, Receiver<PathEvent>) {
-    let (tx, rx) = unbounded();
-    let w = ds
-        .watch_path(DottedPath::parse(path).unwrap(), None, move |e| {
-            let _ = tx.send(e.clone());
-        })
-        .unwrap();
-    (w, rx)
-}
-
-/// Waits until the watched path holds `want`; panics (naming it) if it does not in time.
-fn until(rx: &Receiver<PathEvent>, what: &str, want: &Value) {
-    let mut seen = Vec::new();
-    loop {
-        match rx.recv_timeout(PATIENCE) {
-            Ok(e) if e.kind != Kind::Deleted && e.value.as_ref() == Some(want) => return,
-            Ok(e) => seen.push(e.value),
-            Err(_) => panic!("{what} never became {want:?}; saw {seen:?}"),
-        }
-    }
 }
 
 fn call(ds: &DataServer, path: &[&str], method: &str, args: Vec<Value>) -> CallOutcome {
