@@ -93,6 +93,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "mocu-replay",
             "mocu-record",
             "mocu-distrib",
+            "mocu-script",
         ],
     ),
 ];
