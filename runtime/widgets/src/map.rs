@@ -551,12 +551,19 @@ impl Shared {
         }
     }
 
-    /// The `follow` and `zoom` of the Map widget placed in window `g`, if given.
+    /// The `follow` and `zoom` of the Map widget placed in window `g` (the first shown one),
+    /// if given.
     fn widget_params(&self, g: Guid) -> (Option<Guid>, Option<f64>) {
         let ds = &self.ds;
         let widgets = ds.children(g).unwrap_or_default();
-        let Some(w) = widgets.iter().find(|w| ds.info(**w).is_ok_and(|i| &*i.subtype == "Map"))
-        else {
+        let maps: Vec<Guid> = widgets
+            .into_iter()
+            .filter(|w| ds.info(*w).is_ok_and(|i| &*i.subtype == "Map"))
+            .collect();
+        // The shown one, where a window holds several (fig. 1: one per place to swap with).
+        let shown =
+            |w: &&Guid| ds.try_get(**w, PropName::new("visible")) != Some(Value::Bool(false));
+        let Some(w) = maps.iter().find(shown).or(maps.first()) else {
             return (None, None);
         };
         // An object argument is published as its path (`root.vehicles.usv1`).

@@ -183,9 +183,10 @@ fn assert_reticle_centred(f: &Figure, when: &str) {
 
 /// Fig. 1 on its 800×480 design: the drive camera large, the payload camera and the map
 /// small. A tap on the payload camera exchanges it with the drive camera (animated: the
-/// midpoint and the end are goldens); then a tap on the map enlarges the map, and a tap on
-/// the drive camera brings it back. The reticle stays on the drive camera's middle at every
-/// size, and the payload picture (monochrome, narrow) is not the drive picture.
+/// midpoint and the end are goldens); then a tap on the map enlarges the map, and a tap in the
+/// middle of the small drive camera (where its reticle is) brings it back. The reticle stays
+/// on the drive camera's middle at every size, and the payload picture (monochrome, narrow)
+/// is not the drive picture.
 #[test]
 fn figure1_enlarges_any_window_and_the_reticle_stays_on_the_drive_camera() {
     let mut f = Figure::new("fig1-swap.mocu", (800, 480), 6.0);
@@ -209,12 +210,46 @@ fn figure1_enlarges_any_window_and_the_reticle_stays_on_the_drive_camera() {
     f.frame();
     assert_eq!(enlarged(&f), "chart", "the map in the large place");
     assert_eq!(f.rect(&["display", "payload"])[2], 200.0, "the payload camera small again");
-    // Beside the reticle (its window above the camera's takes the pointer where it draws).
-    f.tap("main", (0.25, 0.7));
+    // On the reticle: it takes the press its window would.
+    f.tap("main", MIDDLE);
     f.animate(450);
     f.frame();
     assert_eq!(enlarged(&f), "main", "the drive camera back in the large place");
     assert_reticle_centred(&f, "drive camera large again");
+}
+
+/// Fig. 1 on screens other than its design, and by touch: each window in turn is tapped in
+/// its middle (the drive camera's on its reticle) and grows into the large place, the one
+/// there shrinking into its corner; the reticle is on the drive camera's middle before,
+/// halfway through and after every exchange.
+#[test]
+fn figure1_by_touch_at_every_screen_size_the_tapped_window_is_enlarged_under_its_reticle() {
+    for size in [(800, 480), (1280, 720), (1920, 1080), (1024, 768)] {
+        let mut f = Figure::new("fig1-swap.mocu", size, 0.5);
+        f.frame();
+        let large = f.rect(&["display", "main"]);
+        for (tap, why) in
+            [("payload", "payload"), ("main", "drive"), ("chart", "map"), ("main", "drive")]
+        {
+            let [x, y, w, h] = f.rect(&["display", tap]);
+            // The map is tapped clear of the vehicle it follows (a tap there selects it).
+            let at = if tap == "chart" { (0.85, 0.75) } else { MIDDLE };
+            let (px, py) = ((x + w * at.0) as f32, (y + h * at.1) as f32);
+            f.display.touch(1, TouchPhase::Started, px, py);
+            f.display.touch(1, TouchPhase::Ended, px, py);
+            f.ds.quiesce();
+            f.layout.settle();
+            f.ds.quiesce();
+            f.animate(200);
+            f.frame();
+            assert_reticle_centred(&f, &format!("{size:?}: halfway to the {why} enlarged"));
+            f.animate(250);
+            f.frame();
+            assert_eq!(enlarged(&f), tap, "{size:?}: a tap on the {why} window enlarges it");
+            assert_eq!(f.rect(&["display", tap]), large, "{size:?}: the whole large place");
+            assert_reticle_centred(&f, &format!("{size:?}: the {why} enlarged"));
+        }
+    }
 }
 
 /// Fig. 2 on its 800×480 handheld design: the tracked UGV's drive camera large, its payload

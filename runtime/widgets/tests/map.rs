@@ -348,3 +348,44 @@ fn a_route_is_edited_on_the_map_by_inserting_dragging_and_deleting_waypoints() {
     assert_eq!(rig.route(route), moved);
     assert!(rig.ds.resolve(&["display", "context_menu"]).is_none(), "the menu closed");
 }
+
+/// The route deltas of the simulator: a waypoint dragged on the map is a change of that one
+/// waypoint's position in the world model, nothing else of the route (no object created,
+/// moved or deleted, no other waypoint written), as the DataServer's change feed — what a
+/// recorder or a remote OCU sees — shows. (The simulator flies it as it is now:
+/// runtime/sim/tests/sim.rs, `a_waypoint_moved_while_the_route_is_flown_is_flown_to_where_it_is_now`.)
+#[test]
+fn a_waypoint_dragged_on_the_map_changes_only_that_waypoint_in_the_world_model() {
+    use mocu_dataserver::Change;
+    let mut rig = Rig::new("tests/map.mocu", with_harbour(), 2);
+    let path = "root.vehicles.usv2.routes.patrol";
+    let route = rig.ds.resolve(&["vehicles", "usv2", "routes", "patrol"]).unwrap();
+    let wps = mocu_host::world::route_waypoints(&rig.ds, route);
+    let ours: Vec<Guid> = std::iter::once(route).chain(wps.iter().copied()).collect();
+    let at = rig.drawn(path);
+    let feed = rig.ds.change_feed();
+    rig.pointer("down", 0, at[2]);
+    rig.pointer("move", -1, (at[2].0 + 12.0, at[2].1 - 6.0));
+    rig.pointer("move", -1, (at[2].0 + 24.0, at[2].1 - 12.0));
+    rig.pointer("up", 0, (at[2].0 + 24.0, at[2].1 - 12.0));
+    let mut written = std::collections::BTreeSet::new();
+    for c in feed.take() {
+        match c.change {
+            Change::PropertySet { object, name, .. } | Change::PropertyDeleted { object, name }
+                if ours.contains(&object) =>
+            {
+                assert_eq!(object, wps[2], "only the dragged waypoint is written, not {name}");
+                written.insert(name.to_string());
+            }
+            Change::Created { object, parent, .. } if ours.contains(&parent) => {
+                panic!("an object {object:?} created in the route")
+            }
+            Change::Moved { object, .. } | Change::Deleted { object } if ours.contains(&object) => {
+                panic!("the route's shape changed: {:?}", c.change)
+            }
+            _ => {}
+        }
+    }
+    let want = ["lat", "lon", "x", "y"].map(String::from);
+    assert_eq!(written, want.into_iter().collect(), "its position, and only that");
+}

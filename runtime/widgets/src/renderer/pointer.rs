@@ -159,7 +159,8 @@ impl Shared {
         })
     }
 
-    /// The topmost pressable widget under a window-local point.
+    /// The topmost pressable widget under a window-local point (a hidden widget has no
+    /// events: fig. 1 shows one press target per place its window can be exchanged with).
     fn widget_at(&self, window: Guid, p: Point) -> Option<Guid> {
         let mut ws = self.ds.children(window).ok()?;
         ws.sort_by_key(|w| {
@@ -168,7 +169,9 @@ impl Shared {
         ws.into_iter().rev().find(|w| {
             let has_press =
                 self.ds.methods(*w).is_ok_and(|m| m.iter().any(|m| m.name.as_str() == "press"));
+            let hidden = self.ds.try_get(*w, PropName::new("visible")) == Some(Value::Bool(false));
             has_press
+                && !hidden
                 && enabled(&self.ds, *w)
                 && widget_bounds(&self.ds, *w).is_some_and(|b| b.contains(p))
         })
