@@ -1,6 +1,6 @@
 //! The arbiter: control arbitration (docs/distribution.md, "Control arbitration") at the
 //! site that owns the vehicles' links. Every vehicle under `root.vehicles` gets an
-//! `arbitration` object (`holder`, `requested_by`, `takeover`, `holder_connected`; methods
+//! `arbitration` object (`holder`, `requested_by`, `policy`, `holder_connected`; methods
 //! `request()`, `release()`, `takeover()`, `answer(accept)`) that other sites mirror like
 //! the rest of the vehicle; calls from other sites are screened (`calls.rs` asks
 //! [`Arbiter::screen`]) with the operator and site their payload carries; a holder whose site
@@ -169,7 +169,7 @@ impl Arbiter {
         for (prop, desc) in [
             ("holder", "The operator in control, empty when none"),
             ("requested_by", "An operator asking the holder for a takeover, empty when none"),
-            ("takeover", "What a takeover does: allowed, denied or ask (the holder answers)"),
+            ("policy", "What a takeover does: allowed, denied or ask (the holder answers)"),
         ] {
             let _ = ds.create_property(object, prop, Value::str(""), string().describe(desc));
         }
@@ -405,7 +405,7 @@ impl Arbiter {
         let asker = c.requested_by.as_ref().map_or("", |r| r.operator.as_str());
         let _ = ds.set(v.object, "holder", Value::str(c.holder_name()));
         let _ = ds.set(v.object, "requested_by", Value::str(asker));
-        let _ = ds.set(v.object, "takeover", Value::str(c.takeover.name()));
+        let _ = ds.set(v.object, "policy", Value::str(c.takeover.name()));
         let connected = c.holder.is_some() && c.gone.is_none();
         let _ = ds.set(v.object, "holder_connected", Value::Bool(connected));
     }

@@ -96,8 +96,8 @@ fn ok() -> CallOutcome {
 fn every_vehicle_gets_an_arbitration_object_with_its_policy_and_methods() {
     let w = world();
     assert_eq!(w.prop("usv1", "holder"), Value::str(""));
-    assert_eq!(w.prop("usv1", "takeover"), Value::str("allowed"));
-    assert_eq!(w.prop("usv2", "takeover"), Value::str("ask"));
+    assert_eq!(w.prop("usv1", "policy"), Value::str("allowed"));
+    assert_eq!(w.prop("usv2", "policy"), Value::str("ask"));
     assert_eq!(w.prop("usv2", "holder_connected"), Value::Bool(false));
     let o = w.ds.resolve(&["vehicles", "usv1", OBJECT]).unwrap();
     let names: Vec<String> =
@@ -106,7 +106,7 @@ fn every_vehicle_gets_an_arbitration_object_with_its_policy_and_methods() {
     // A vehicle that comes later gets one too.
     let vs = w.ds.resolve(&["vehicles"]).unwrap();
     w.ds.create_object(vs, ObjectInfo::new("uav1", "uav")).unwrap();
-    assert_eq!(w.prop("uav1", "takeover"), Value::str("allowed"));
+    assert_eq!(w.prop("uav1", "policy"), Value::str("allowed"));
 }
 
 #[test]
