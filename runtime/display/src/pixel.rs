@@ -76,6 +76,32 @@ pub fn over(dst: &mut [u8; 4], src: [u8; 4]) {
     *dst = collapse(expand(s) + d).to_le_bytes();
 }
 
+/// A colour made ready to be blended over many pixels one at a time (a grid line's
+/// column, row after row): its lanes and inverse alpha worked out once. [`Over::over`]
+/// writes exactly what [`over`] writes.
+#[derive(Clone, Copy, Debug)]
+pub struct Over {
+    src: [u8; 4],
+    lanes: u64,
+    inv: u64,
+}
+
+impl Over {
+    pub fn new(src: [u8; 4]) -> Over {
+        Over { src, lanes: expand(u32::from_le_bytes(src)), inv: 255 - src[3] as u64 }
+    }
+
+    #[inline(always)]
+    pub fn over(&self, dst: &mut [u8; 4]) {
+        if self.inv == 0 {
+            *dst = self.src;
+            return;
+        }
+        let d = scale_lanes(expand(u32::from_le_bytes(*dst)), self.inv);
+        *dst = collapse(self.lanes + d).to_le_bytes();
+    }
+}
+
 /// Source-over of `src` under coverage `k` (0..=255): a glyph mask or an anti-aliased
 /// edge pixel.
 #[inline(always)]
@@ -171,17 +197,19 @@ pub fn blend_row(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
     let mut d8 = dst.chunks_exact_mut(8);
     let mut s8 = src.chunks_exact(8);
     for (d, s) in (&mut d8).zip(&mut s8) {
-        // Whole pixels or'ed and and'ed (vector lanes), then their alpha bytes.
-        let (mut any, mut all) = (0u32, u32::MAX);
-        for p in s {
-            let v = u32::from_le_bytes(*p);
+        // Two pixels a word or'ed and and'ed, then their alpha bytes (four loads, not
+        // eight: this test runs on every 8 pixels of a layer's drawn-on tiles).
+        let (w, _) = s.as_flattened().as_chunks::<8>();
+        let (mut any, mut all) = (0u64, u64::MAX);
+        for p in w {
+            let v = u64::from_le_bytes(*p);
             any |= v;
             all &= v;
         }
-        if any >> 24 == 0 {
+        if any & ALPHAS == 0 {
             continue;
         }
-        if all >> 24 == 255 && opacity == 255 {
+        if all & ALPHAS == ALPHAS && opacity == 255 {
             d.copy_from_slice(s);
             continue;
         }
@@ -193,6 +221,9 @@ pub fn blend_row(dst: &mut [[u8; 4]], src: &[[u8; 4]], opacity: u8) {
         over_coverage(d, *s, opacity);
     }
 }
+
+/// The alpha bytes of two pixels in a little-endian word.
+const ALPHAS: u64 = 0xFF00_0000_FF00_0000;
 
 const PAIRS: u32 = 0x00FF_00FF;
 
@@ -315,6 +346,21 @@ mod tests {
     /// A row of 19 pixels (two 8-pixel runs and a remainder) of varied pixels.
     fn row(seed: usize) -> Vec<[u8; 4]> {
         (0..19).map(|i| SAMPLES[(i * 5 + seed) % SAMPLES.len()]).collect()
+    }
+
+    #[test]
+    fn a_prepared_colour_blends_exactly_as_over_does() {
+        for d in SAMPLES {
+            for s in SAMPLES {
+                for k in [0u8, 1, 77, 128, 254, 255] {
+                    let s = scale(s, k);
+                    let (mut got, mut want) = (d, d);
+                    Over::new(s).over(&mut got);
+                    over(&mut want, s);
+                    assert_eq!(got, want, "d={d:?} s={s:?}");
+                }
+            }
+        }
     }
 
     #[test]

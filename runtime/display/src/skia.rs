@@ -16,6 +16,7 @@ mod lazy;
 mod masks;
 mod pictures;
 mod resample;
+mod segments;
 use tiny_skia::{FillRule, Mask, Paint, Pixmap};
 
 #[derive(Clone, Copy, Debug)]

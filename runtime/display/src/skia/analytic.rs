@@ -7,9 +7,7 @@ use super::SkiaCanvas;
 use crate::canvas::{LineCap, Stroke};
 use crate::color::Color;
 use crate::geom::{IRect, Point, Rect};
-use crate::path::Path;
 use crate::pixel;
-use crate::tiles::TILE_H;
 
 impl SkiaCanvas {
     /// Circles and rings under a translate + uniform scale, with analytic coverage:
@@ -83,14 +81,14 @@ impl SkiaCanvas {
 impl SkiaCanvas {
     /// The uniform scale of the device transform when it is a translate + uniform
     /// positive scale (the analytic rasterisers' precondition).
-    fn uniform_scale(&self) -> Option<f32> {
+    pub(super) fn uniform_scale(&self) -> Option<f32> {
         let dev = self.device();
         (dev.is_axis_aligned() && dev.sx > 0.0 && (dev.sx - dev.sy).abs() < 1e-6).then_some(dev.sx)
     }
 
     /// Blends premultiplied `pre` at coverage `k` (0..=1) onto pixel `i` of the pixmap.
     #[inline]
-    fn cover(px: &mut [[u8; 4]], i: usize, pre: [u8; 4], k: f32) {
+    pub(super) fn cover(px: &mut [[u8; 4]], i: usize, pre: [u8; 4], k: f32) {
         pixel::over_coverage(&mut px[i], pre, (k * 255.0 + 0.5) as u8);
     }
 
@@ -208,195 +206,6 @@ impl SkiaCanvas {
         });
         Some(())
     }
-
-    /// Disjoint straight segments (each subpath one `move`+`line`), stroked with analytic
-    /// coverage: ticks, needles' lines, crosses, grid lines. `None` when the path or the
-    /// transform is not of that kind.
-    pub(super) fn segments(&mut self, path: &Path, stroke: &Stroke, color: Color) -> Option<()> {
-        let s = self.uniform_scale()?;
-        if stroke.dash.is_some() {
-            return None;
-        }
-        let els = path.elements();
-        if els.is_empty() || !els.len().is_multiple_of(2) || els.len() > 512 {
-            return None;
-        }
-        let mut segs = Vec::with_capacity(els.len() / 2);
-        for pair in els.chunks_exact(2) {
-            match pair {
-                [crate::path::PathEl::MoveTo(a), crate::path::PathEl::LineTo(b)] => {
-                    segs.push((*a, *b))
-                }
-                _ => return None,
-            }
-        }
-        if color.a == 0 || stroke.width <= 0.0 {
-            return Some(());
-        }
-        let dev = self.device();
-        let hw = stroke.width * s / 2.0;
-        let pre = pixel::premultiply(color);
-        let clip = self.state.clip;
-        let w = self.pixmap.width() as usize;
-        // Caps extend the segment: square by hw, round (as capsules) by hw.
-        let ext = match stroke.cap {
-            LineCap::Butt => 0.0,
-            LineCap::Square | LineCap::Round => hw,
-        };
-        let pad = hw + 1.0;
-        let thin = (2.0 * hw).min(1.0);
-        let ka = |along: f32, len: f32| {
-            (along + ext + 0.5).clamp(0.0, 1.0).min((len + ext - along + 0.5).clamp(0.0, 1.0))
-        };
-        let kp = |across: f32| (hw + 0.5 - across).clamp(0.0, thin);
-        let mut prepared: Vec<Seg> = Vec::with_capacity(segs.len());
-        for (a, b) in segs {
-            let (a, b) = (dev.apply(a), dev.apply(b));
-            let (vx, vy) = (b.x - a.x, b.y - a.y);
-            let len = (vx * vx + vy * vy).sqrt();
-            if len < 1e-4 {
-                continue;
-            }
-            let (ux, uy) = (vx / len, vy / len);
-            let bbox = IRect::covering(Rect::new(
-                a.x.min(b.x) - pad - ext,
-                a.y.min(b.y) - pad - ext,
-                vx.abs() + 2.0 * (pad + ext),
-                vy.abs() + 2.0 * (pad + ext),
-            ))
-            .intersect(&clip);
-            if bbox.is_empty() {
-                continue;
-            }
-            self.tiles.mark(bbox);
-            // Axis-aligned (grid lines, ticks): the coverage is a factor of the column
-            // times a factor of the row, and along the line whole runs share one.
-            let fx = (stroke.cap != LineCap::Round && (ux == 0.0 || uy == 0.0)).then(|| {
-                (bbox.x..bbox.right())
-                    .map(|x| {
-                        let pxv = x as f32 + 0.5 - a.x;
-                        if uy == 0.0 { ka(pxv * ux, len) } else { kp((pxv * uy).abs()) }
-                    })
-                    .collect()
-            });
-            // The same as coverage bytes, for the rows the line crosses whole.
-            let kx = fx.as_ref().map(|fx: &Vec<f32>| {
-                fx.iter().map(|k| (k * 255.0 + 0.5) as u8).collect::<Vec<u8>>()
-            });
-            // A narrow one (a vertical line) as its few covered columns' colours: a
-            // call of the row kernel costs more than blending two pixels.
-            let sk = kx.as_ref().and_then(|kx| {
-                let first = kx.iter().position(|k| *k != 0)?;
-                let end = kx.len() - kx.iter().rev().position(|k| *k != 0)?;
-                (end - first <= 8).then(|| {
-                    (first, kx[first..end].iter().map(|k| pixel::scale(pre, *k)).collect())
-                })
-            });
-            prepared.push(Seg { a, ux, uy, len, bbox, fx, kx, sk });
-        }
-        let Some(top) = prepared.iter().map(|g| g.bbox.y).min() else { return Some(()) };
-        let bottom = prepared.iter().map(|g| g.bbox.bottom()).max().unwrap_or(top);
-        // Row by row over all the segments: a grid's vertical lines touch each row of the
-        // pixmap once, in memory order, instead of a new page per pixel; a band of rows
-        // made ready (cleared, its background filled) just before it is drawn on.
-        let left = prepared.iter().map(|g| g.bbox.x).min().unwrap_or(0);
-        let right = prepared.iter().map(|g| g.bbox.right()).max().unwrap_or(left);
-        let mut band = top;
-        while band < bottom {
-            let end = ((band / TILE_H + 1) * TILE_H).min(bottom);
-            self.prepare(IRect::new(left, band, right - left, end - band));
-            let (px, _) = self.pixmap.data_mut().as_chunks_mut::<4>();
-            for y in band..end {
-                let row = &mut px[y as usize * w..][..w];
-                for g in &prepared {
-                    if y < g.bbox.y || y >= g.bbox.bottom() {
-                        continue;
-                    }
-                    let (a, ux, uy, len) = (g.a, g.ux, g.uy, g.len);
-                    let py = y as f32 + 0.5 - a.y;
-                    if let Some(fx) = &g.fx {
-                        let fy = if uy == 0.0 { kp((py * ux).abs()) } else { ka(py * uy, len) };
-                        if fy <= 0.0 {
-                            continue;
-                        }
-                        let row = &mut row[g.bbox.x as usize..][..fx.len()];
-                        if fy == 1.0
-                            && let Some((first, sk)) = &g.sk
-                        {
-                            // Wholly crossed, narrow: `over` of each column's colour under
-                            // its coverage is `over_coverage` of the colour.
-                            row[*first..].iter_mut().zip(sk).for_each(|(d, s)| pixel::over(d, *s));
-                            continue;
-                        }
-                        if fy == 1.0
-                            && let Some(kx) = &g.kx
-                        {
-                            // Wholly crossed: each column's coverage as it is.
-                            pixel::cover_row(row, pre, kx);
-                            continue;
-                        }
-                        let run = pixel::scale(pre, (fy * 255.0 + 0.5) as u8);
-                        let mut i = 0;
-                        while i < fx.len() {
-                            if fx[i] == 1.0 {
-                                let e = i + fx[i..].iter().take_while(|k| **k == 1.0).count();
-                                pixel::blend_span(&mut row[i..e], run);
-                                i = e;
-                                continue;
-                            }
-                            let k = fx[i] * fy;
-                            if k > 0.0 {
-                                SkiaCanvas::cover(row, i, pre, k);
-                            }
-                            i += 1;
-                        }
-                        continue;
-                    }
-                    // The columns near the line on this row.
-                    let (xa, xb) = if uy.abs() > 1e-3 {
-                        let xc = a.x + py * ux / uy;
-                        let span = (pad + ext) / uy.abs();
-                        ((xc - span).floor() as i32, (xc + span).ceil() as i32)
-                    } else {
-                        (g.bbox.x, g.bbox.right())
-                    };
-                    for x in xa.max(g.bbox.x)..xb.min(g.bbox.right()) {
-                        let pxv = x as f32 + 0.5 - a.x;
-                        let along = pxv * ux + py * uy;
-                        let across = (pxv * uy - py * ux).abs();
-                        let k = match stroke.cap {
-                            LineCap::Round => {
-                                let t = along.clamp(0.0, len);
-                                let d = ((pxv - ux * t).powi(2) + (py - uy * t).powi(2)).sqrt();
-                                (hw + 0.5 - d).clamp(0.0, thin)
-                            }
-                            _ => ka(along, len) * kp(across),
-                        };
-                        if k > 0.0 {
-                            SkiaCanvas::cover(row, x as usize, pre, k);
-                        }
-                    }
-                }
-            }
-            band = end;
-        }
-        Some(())
-    }
-}
-
-/// A segment in pixmap pixels, ready to scan: its start, unit direction and length, the
-/// pixels it may touch, and for an axis-aligned one the coverage factor of each column.
-struct Seg {
-    a: Point,
-    ux: f32,
-    uy: f32,
-    len: f32,
-    bbox: IRect,
-    fx: Option<Vec<f32>>,
-    kx: Option<Vec<u8>>,
-    /// For a narrow one: the first covered column (from `bbox.x`) and the colour under
-    /// each covered column's coverage.
-    sk: Option<(usize, Vec<[u8; 4]>)>,
 }
 
 /// The pixels a disc of radius `ro` around `c` may touch (one pixel of anti-aliasing
