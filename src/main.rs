@@ -11,6 +11,7 @@ mod check;
 mod fmt;
 mod frames;
 mod golden;
+mod live_tree;
 mod logger;
 mod lsp;
 mod record;

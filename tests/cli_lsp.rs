@@ -1,14 +1,16 @@
 //! `mocu lsp` end to end with a real LSP client: tests/peers/lsp/test_mocu_lsp.py, run by
 //! pytest with pytest-lsp (CI pins it in .ci/run), drives the built `mocu lsp` over stdio as an
-//! editor does. Every Python test must pass: none may be skipped, and a missing pytest-lsp
-//! fails here with the install line instead of passing silently.
+//! editor does; tests/peers/lsp/test_live_values.py does it with a running `mocu serve` whose
+//! vehicles completion and hover show live. Every Python test must pass: none may be skipped,
+//! and a missing pytest-lsp fails here with the install line instead of passing silently.
 
 use std::process::Command;
 
-const TESTS: &str = "tests/peers/lsp/test_mocu_lsp.py";
+const TESTS: [&str; 2] =
+    ["tests/peers/lsp/test_mocu_lsp.py", "tests/peers/lsp/test_live_values.py"];
 
 #[test]
-fn mocu_lsp_passes_the_language_client_tests_open_edit_diagnostics_completion_hover_definition_rename()
+fn mocu_lsp_passes_the_language_client_tests_open_edit_diagnostics_completion_hover_definition_rename_live_values()
  {
     let root = env!("CARGO_MANIFEST_DIR");
     let o = Command::new("python3")
@@ -22,8 +24,8 @@ fn mocu_lsp_passes_the_language_client_tests_open_edit_diagnostics_completion_ho
             "asyncio_mode=auto",
             "-o",
             "asyncio_default_fixture_loop_scope=function",
-            TESTS,
         ])
+        .args(TESTS)
         .current_dir(root)
         .env("MOCU_BIN", env!("CARGO_BIN_EXE_mocu"))
         .output()

@@ -8,7 +8,8 @@ const { LanguageClient } = require("vscode-languageclient/node");
 let client;
 
 function activate(context) {
-  const command = vscode.workspace.getConfiguration("mocu").get("server.path") || "mocu";
+  const config = vscode.workspace.getConfiguration("mocu");
+  const command = config.get("server.path") || "mocu";
   const server = { command, args: ["lsp"] };
   client = new LanguageClient(
     "mocu",
@@ -16,6 +17,8 @@ function activate(context) {
     { run: server, debug: server },
     {
       documentSelector: [{ scheme: "file", language: "mocu" }],
+      // Live values in completion and hover from a running OCU or adapter (docs/editors.md).
+      initializationOptions: { live: { connect: config.get("live.connect") || [] } },
       // Profiles and schemas change what a layout means: tell the server when they are saved.
       synchronize: {
         fileEvents: vscode.workspace.createFileSystemWatcher("**/*.{mocu,toml}"),

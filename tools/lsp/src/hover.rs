@@ -2,8 +2,9 @@
 //! them), a parameter's type, default and meaning, a `let`'s checked type, and what the
 //! project's schemas say of a world-model path (type, units, range, description).
 //!
-//! A world-model path's current value comes from the server's [`LiveTree`] (none until the
-//! distributed world model, issue #17, gives one: then hover shows what the schemas declare).
+//! A world-model path's current value comes from the server's [`LiveTree`] (a running OCU's
+//! shared world model when `mocu lsp` is told where one is; without one hover shows what the
+//! schemas declare).
 
 use crate::check::Analysis;
 use crate::index::{Def, Index, Kind};

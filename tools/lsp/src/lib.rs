@@ -38,9 +38,9 @@ use std::collections::HashMap;
 use text::{LineIndex, path_to_uri, uri_to_path};
 
 /// Serves the protocol on stdin/stdout until the client exits.
-pub fn run_stdio() -> Result<(), String> {
+pub fn run_stdio(options: Options) -> Result<(), String> {
     let (connection, io) = Connection::stdio();
-    serve(connection)?;
+    serve_with(connection, options)?;
     io.join().map_err(|e| e.to_string())
 }
 
@@ -85,17 +85,24 @@ pub fn serve(connection: Connection) -> Result<(), String> {
     serve_with(connection, Options::default())
 }
 
+/// Makes the server's live world values from the client's `initializationOptions` (`None`
+/// when it sent none), once the client has said them.
+pub type LiveSource = Box<dyn FnOnce(Option<&serde_json::Value>) -> Box<dyn live::LiveTree>>;
+
 /// How a server is set up.
 pub struct Options {
     /// How long edits wait before they are checked.
     pub timing: schedule::Timing,
-    /// Where live world values come from (none yet: pending issue #17).
-    pub live: Box<dyn live::LiveTree>,
+    /// Where live world values come from.
+    pub live: LiveSource,
 }
 
 impl Default for Options {
     fn default() -> Options {
-        Options { timing: schedule::Timing::default(), live: Box::new(live::NoLiveTree) }
+        Options {
+            timing: schedule::Timing::default(),
+            live: Box::new(|_| Box::new(live::NoLiveTree)),
+        }
     }
 }
 
@@ -103,7 +110,8 @@ impl Default for Options {
 pub fn serve_with(connection: Connection, options: Options) -> Result<(), String> {
     let Options { timing, live } = options;
     let caps = serde_json::to_value(capabilities()).map_err(|e| e.to_string())?;
-    connection.initialize(caps).map_err(|e| e.to_string())?;
+    let init = connection.initialize(caps).map_err(|e| e.to_string())?;
+    let live = live(init.get("initializationOptions").filter(|o| !o.is_null()));
     let (jobs, rx) = crossbeam_channel::unbounded();
     let analyses = Analyses::default();
     let worker = check::spawn_worker(rx, connection.sender.clone(), analyses.clone(), timing)

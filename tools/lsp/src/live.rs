@@ -2,11 +2,12 @@
 //! (the objects and properties that exist now, `usv3` included when only `usv*` is declared)
 //! and hover (a property's current value).
 //!
-//! Pending issue #17 (the distributed world model, `runtime/distrib`): the language server will
-//! reach a running OCU through it. Until then the server is given [`NoLiveTree`], and shows
-//! what the schemas declare. The server depends only on this trait, so the source (the
-//! distributed world model, or a local endpoint of one OCU) is chosen where the server is
-//! started, and this crate keeps depending on `mocu-language` alone (`tests/architecture.rs`).
+//! The source is made where the server is started ([`crate::Options::live`]): `mocu lsp`
+//! mirrors the shared subtrees of the OCUs and adapters it is told to connect to over the
+//! distributed world model (`src/live_tree.rs` of the `mocu` binary, over `runtime/distrib`);
+//! without one the server has [`NoLiveTree`] and shows what the schemas declare. The server
+//! depends only on this trait, so this crate keeps depending on `mocu-language` alone
+//! (`tests/architecture.rs`).
 
 use crate::paths::{Member, MemberKind};
 use std::time::Duration;
@@ -36,6 +37,8 @@ pub struct LiveChild {
 pub struct LiveValue {
     /// The value, written out.
     pub text: String,
+    /// Its units, when the publisher gives them (`m/s`).
+    pub units: Option<String>,
     /// How long ago it was written, when known.
     pub age: Option<Duration>,
     /// Where it was read (the OCU or adapter), for the hover's last line.
@@ -84,7 +87,8 @@ pub fn value_line(live: &dyn LiveTree, segments: &[String]) -> Option<String> {
     let path = std::iter::once("root").chain(segments.iter().map(String::as_str));
     let v = live.value(&path.collect::<Vec<_>>().join("."))?;
     let age = v.age.map(|a| format!(", {:.1} s ago", a.as_secs_f64())).unwrap_or_default();
-    Some(format!("current value: `{}` (on {}{age})", v.text, v.source))
+    let units = v.units.map(|u| format!(" {u}")).unwrap_or_default();
+    Some(format!("current value: `{}{units}` (on {}{age})", v.text, v.source))
 }
 
 #[cfg(test)]
@@ -103,7 +107,9 @@ mod tests {
             let (parent, name) = path.rsplit_once('.')?;
             let c = self.0.get(parent)?.iter().find(|c| c.name == name)?;
             let text = c.value.clone()?;
-            Some(LiveValue { text, age: Some(Duration::from_millis(200)), source: "ocu-1".into() })
+            let units = Some("m/s".to_string());
+            let age = Some(Duration::from_millis(200));
+            Some(LiveValue { text, units, age, source: "ocu-1".into() })
         }
     }
 
@@ -148,7 +154,7 @@ mod tests {
     #[test]
     fn hover_gets_the_current_value_and_without_an_ocu_nothing_changes() {
         let line = value_line(&fleet(), &segs(&["vehicles", "usv1", "nav", "speed"]));
-        assert_eq!(line.as_deref(), Some("current value: `3.2` (on ocu-1, 0.2 s ago)"));
+        assert_eq!(line.as_deref(), Some("current value: `3.2 m/s` (on ocu-1, 0.2 s ago)"));
         assert_eq!(value_line(&NoLiveTree, &segs(&["vehicles", "usv1", "nav", "speed"])), None);
         let m = vec![Member { name: "a".into(), kind: MemberKind::Object, detail: "x".into() }];
         assert_eq!(merge(&NoLiveTree, &segs(&["vehicles"]), m).len(), 1);
