@@ -122,18 +122,38 @@ fn mk(ty: Type, node: Node, span: Span) -> Expr {
 impl<'a> Typer<'a, '_> {
     fn module(&mut self, m: ModuleId) {
         let base = Scope { module: m, ..Scope::default() };
-        let mut sink = Sink::default();
         let modules = self.modules;
-        for (i, item) in modules[m].ast.items.iter().enumerate() {
+        // The program's lists, reserved to what this module adds: they are alive (with the
+        // syntax trees) until the end of the check, so no room is left spare and nothing is
+        // copied from a list of the module's own (issue 13's memory figure).
+        let p = &mut self.program;
+        let mut sink = Sink {
+            windows: std::mem::take(&mut p.windows),
+            widgets: std::mem::take(&mut p.widgets),
+            watches: std::mem::take(&mut p.watches),
+        };
+        let items = &modules[m].ast.items;
+        let count = |f: fn(&Item) -> usize| items.iter().map(f).sum::<usize>();
+        sink.windows.reserve_exact(count(|i| usize::from(matches!(i, Item::Window(_)))));
+        sink.widgets
+            .reserve_exact(count(|i| if let Item::In(b) = i { b.widgets.len() } else { 0 }));
+        sink.watches.reserve_exact(count(|i| usize::from(matches!(i, Item::Watch(_)))));
+        p.components.reserve_exact(count(|i| usize::from(matches!(i, Item::Component(_)))));
+        p.menus.reserve_exact(count(|i| usize::from(matches!(i, Item::Menu(_)))));
+        p.bindings.reserve_exact(count(|i| match i {
+            Item::Bind(b) => b.bindings.len() + b.modes.iter().map(|m| m.1.len()).sum::<usize>(),
+            _ => 0,
+        }));
+        for (i, item) in items.iter().enumerate() {
             if let Item::Let(_) = item {
                 // Checked even when unused; uses refer to this result.
                 self.lower_top_let(DefId { module: m, item: i, inner: None });
             }
             self.item(item, &base, &mut sink);
         }
-        self.program.windows.append(&mut sink.windows);
-        self.program.widgets.append(&mut sink.widgets);
-        self.program.watches.append(&mut sink.watches);
+        self.program.windows = sink.windows;
+        self.program.widgets = sink.widgets;
+        self.program.watches = sink.watches;
     }
 
     fn item(&mut self, item: &'a Item, scope: &Scope<'a>, sink: &mut Sink) {

@@ -280,6 +280,7 @@ impl<'a> Fast<'a> {
             self.byte(b',');
         }
         self.ws();
+        args.shrink_to_fit();
         self.byte(b')').then_some((args, deepest))
     }
 
@@ -472,6 +473,7 @@ impl<'a> Fast<'a> {
             if !text.is_empty() {
                 parts.push(StrPart::Text(text));
             }
+            parts.shrink_to_fit();
             StrOut::Parts(parts)
         };
         Some((out, deepest, span))

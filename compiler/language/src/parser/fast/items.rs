@@ -6,6 +6,13 @@ use super::expr::StrOut;
 use crate::ast::*;
 use crate::source::Span;
 
+/// A list as long as its items: the tree is kept while the whole layout is checked, and the
+/// room a growing vector keeps spare was a third of it (issue 13's memory figure).
+fn tight<T>(mut v: Vec<T>) -> Vec<T> {
+    v.shrink_to_fit();
+    v
+}
+
 const STYLE_KEYS: &[&str] =
     &["fill", "font", "stroke", "size", "width", "color", "colour", "align", "visible", "opacity"];
 const PRIMITIVE_NAMES: &[&str] =
@@ -132,7 +139,13 @@ impl<'a> Fast<'a> {
             true
         });
         self.then(b'}')?;
-        Some(Item::Window(Window { name, rect, anchor, props, span: self.here(start) }))
+        Some(Item::Window(Window {
+            name,
+            rect,
+            anchor,
+            props: tight(props),
+            span: self.here(start),
+        }))
     }
 
     fn rect_prop(&mut self) -> Option<Vec<Expr>> {
@@ -207,7 +220,7 @@ impl<'a> Fast<'a> {
         let mut widgets = Vec::new();
         self.star(|p| p.attempt(Self::widget).map(|w| widgets.push(w)).is_some());
         self.then(b'}')?;
-        Some(Item::In(InBlock { window, widgets, span: self.here(start) }))
+        Some(Item::In(InBlock { window, widgets: tight(widgets), span: self.here(start) }))
     }
 
     fn widget(&mut self) -> Option<Widget> {
@@ -237,6 +250,7 @@ impl<'a> Fast<'a> {
             true
         });
         self.then(b'}')?;
+        let (args, handlers) = (tight(args), tight(handlers));
         Some(Widget { name, component, at, anchor, args, handlers, span: self.here(start) })
     }
 
@@ -274,7 +288,7 @@ impl<'a> Fast<'a> {
         let mut actions = vec![self.action()?];
         self.ws();
         self.star(|p| p.action().map(|a| actions.push(a)).is_some());
-        Some(actions)
+        Some(tight(actions))
     }
 
     fn component_item(&mut self) -> Option<Item> {
@@ -315,6 +329,7 @@ impl<'a> Fast<'a> {
             true
         });
         self.then(b'}')?;
+        let (params, body) = (tight(params), tight(body));
         Some(Item::Component(Component { name, params, body, span: self.here(start) }))
     }
 
@@ -371,7 +386,7 @@ impl<'a> Fast<'a> {
             .map(|prop| styles.push(prop))
             .is_some()
         });
-        Some(Primitive { kind, args, styles, span: self.here(start) })
+        Some(Primitive { kind, args: tight(args), styles: tight(styles), span: self.here(start) })
     }
 
     fn bind_item(&mut self) -> Option<Item> {
@@ -394,6 +409,7 @@ impl<'a> Fast<'a> {
             true
         });
         self.then(b'}')?;
+        let (bindings, modes) = (tight(bindings), tight(modes));
         Some(Item::Bind(Bind { device, shift, bindings, modes, span: self.here(start) }))
     }
 
@@ -432,7 +448,7 @@ impl<'a> Fast<'a> {
         let mut bindings = Vec::new();
         self.star(|p| p.attempt(Self::binding).map(|b| bindings.push(b)).is_some());
         self.then(b'}')?;
-        Some((name, bindings))
+        Some((name, tight(bindings)))
     }
 
     fn binding(&mut self) -> Option<Binding> {
@@ -451,7 +467,14 @@ impl<'a> Fast<'a> {
         self.then_lit(b"->")?;
         self.ws();
         let actions = self.actions()?;
-        Some(Binding { shift, kind, input, options, actions, span: self.here(start) })
+        Some(Binding {
+            shift,
+            kind,
+            input,
+            options: tight(options),
+            actions,
+            span: self.here(start),
+        })
     }
 
     fn binding_opt(&mut self) -> Option<BindingOption> {
@@ -484,7 +507,12 @@ impl<'a> Fast<'a> {
         let mut entries = Vec::new();
         self.star(|p| p.attempt(Self::menu_entry).map(|e| entries.push(e)).is_some());
         self.then(b'}')?;
-        Some(Item::Menu(Menu { object_type, type_span, entries, span: self.here(start) }))
+        Some(Item::Menu(Menu {
+            object_type,
+            type_span,
+            entries: tight(entries),
+            span: self.here(start),
+        }))
     }
 
     fn menu_entry(&mut self) -> Option<MenuEntry> {
@@ -568,7 +596,13 @@ impl<'a> Fast<'a> {
             item.map(|i| items.push(i)).is_some()
         });
         self.then(b'}')?;
-        Some(Item::Each(Each { var, source, object_type, items, span: self.here(start) }))
+        Some(Item::Each(Each {
+            var,
+            source,
+            object_type,
+            items: tight(items),
+            span: self.here(start),
+        }))
     }
 
     /// `action`: `set`, `call`, `swap`, `show`, `hide`, `alert`, `mode` or `select`.

@@ -5,7 +5,7 @@ use super::*;
 
 impl<'a> Typer<'a, '_> {
     pub(super) fn actions(&mut self, actions: &[ast::Action], scope: &Scope<'a>) -> Vec<Action> {
-        let mut out = Vec::new();
+        let mut out = Vec::with_capacity(actions.len());
         for a in actions {
             let span = a.span;
             match &a.kind {
