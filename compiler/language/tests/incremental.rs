@@ -185,3 +185,66 @@ fn floor(s: &str, mut at: usize) -> usize {
     }
     at
 }
+
+/// `path`'s diagnostics and program from a fresh check of `text`.
+fn checked(path: &str, text: &str) -> (Vec<mocu_language::Diagnostic>, mocu_language::Program) {
+    let (mut sources, mut d) = (SourceMap::new(), Diagnostics::new());
+    let (schema, config) = (Schema::default(), Config::default());
+    let p = mocu_language::compile_layout(
+        path,
+        text.into(),
+        &FsLoader,
+        &schema,
+        &config,
+        &mut sources,
+        &mut d,
+    );
+    (d.into_vec(), p)
+}
+
+/// The same through `cache`.
+fn rechecked(
+    cache: &mut ItemCache,
+    path: &str,
+    text: &str,
+) -> (Vec<mocu_language::Diagnostic>, mocu_language::Program) {
+    let (mut sources, mut d) = (SourceMap::new(), Diagnostics::new());
+    let (schema, config) = (Schema::default(), Config::default());
+    let p =
+        cache.compile_layout(path, text.into(), &FsLoader, &schema, &config, &mut sources, &mut d);
+    (d.into_vec(), p)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, failure_persistence: None, ..ProptestConfig::default() })]
+
+    /// A sequence of edits (each a piece of text put in place of a few bytes of the text
+    /// before it), checked one after the other through one cache as the language server
+    /// checks keystrokes, gives after each edit exactly the diagnostics and the program of a
+    /// fresh check of that text.
+    #[test]
+    fn a_sequence_of_edits_checked_through_the_cache_gives_what_a_fresh_check_gives(
+        file in 0usize..400,
+        edits in proptest::collection::vec(
+            (0usize..4000, 0usize..8, proptest::sample::select(PIECES)),
+            1..6,
+        ),
+    ) {
+        let (path, base) = &corpus()[file % corpus().len()];
+        let mut cache = ItemCache::new();
+        let mut text = base.clone();
+        let (d, p) = rechecked(&mut cache, path, &text);
+        let (want_d, want_p) = checked(path, &text);
+        prop_assert_eq!(d, want_d);
+        prop_assert!(p == want_p, "{}: the programs differ before any edit", path);
+        for (cut, len, piece) in edits {
+            let at = floor(&text, cut.min(text.len()));
+            let end = floor(&text, (at + len).min(text.len()));
+            text = format!("{}{piece}{}", &text[..at], &text[end..]);
+            let (d, p) = rechecked(&mut cache, path, &text);
+            let (want_d, want_p) = checked(path, &text);
+            prop_assert_eq!(d, want_d, "{} after an edit at {}", path, at);
+            prop_assert!(p == want_p, "{}: the programs differ after an edit at {}", path, at);
+        }
+    }
+}
