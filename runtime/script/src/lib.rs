@@ -20,6 +20,7 @@ mod js;
 mod module;
 mod rhai;
 mod script;
+mod watch;
 
 pub use api::{Api, CallbackId, Reporter};
 pub use engine::{Engine, Instance, Limits, Registry};

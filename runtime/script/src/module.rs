@@ -5,7 +5,7 @@
 //! `root.modules.NAME` shows `file`, `engine`, `generation` (loads so far) and `error` (the
 //! last error, file:line:col, empty when none). Its method `reload()` reads the file again:
 //! a script that does not compile is refused and the running one kept (as a broken layout
-//! is); one that does replaces it. `mocu run` calls it when the file is saved.
+//! is); one that does replaces it. The same happens when the file is saved (`watch.rs`).
 
 use crate::api::Reporter;
 use crate::engine::{Limits, Registry};
@@ -27,6 +27,7 @@ pub struct ScriptModule {
     limits: Limits,
     engines: Registry,
     state: Arc<Mutex<Option<Running>>>,
+    watcher: Option<notify::RecommendedWatcher>,
 }
 
 struct Running {
@@ -55,7 +56,13 @@ impl ScriptModule {
             call_depth: d.call_depth,
             files: spec.bool_or("files", false).map_err(|e| e.to_string())?,
         };
-        Ok(ScriptModule { file, limits, engines: Registry::standard(), state: Arc::default() })
+        Ok(ScriptModule {
+            file,
+            limits,
+            engines: Registry::standard(),
+            state: Arc::default(),
+            watcher: None,
+        })
     }
 
     /// Bytes its engine holds now, where the engine counts them.
@@ -76,18 +83,26 @@ impl Module for ScriptModule {
             self.engines.clone(),
             self.state.clone(),
         );
+        let reload = Arc::new(move || load(&c, &file, &limits, &engines, &state));
+        let (r, c) = (reload.clone(), ctx.clone());
+        let on_save = move || {
+            // Refused: the error is reported and shown, the running script kept.
+            if let Err(e) = r() {
+                c.report(Level::Error, e.to_string());
+            }
+        };
+        self.watcher = Some(crate::watch::follow(ctx, &self.file, on_save)?);
         let spec = MethodSpec::new("reload").describe("Reads the script file again and runs it");
         ctx.ds
-            .publish_method_fn(ctx.status, spec, move |_| {
-                match load(&c, &file, &limits, &engines, &state) {
-                    Ok(()) => CallOutcome::Accepted(Vec::new()),
-                    Err(e) => CallOutcome::Refused(e.to_string()),
-                }
+            .publish_method_fn(ctx.status, spec, move |_| match reload() {
+                Ok(()) => CallOutcome::Accepted(Vec::new()),
+                Err(e) => CallOutcome::Refused(e.to_string()),
             })
             .map_err(|e| e.to_string())
     }
 
     fn stop(&mut self) {
+        self.watcher = None;
         if let Some(r) = self.state.lock().take() {
             r.script.stop();
         }

@@ -115,3 +115,47 @@ fn an_error_while_running_is_reported_to_the_host_with_file_line_and_column() {
     let Some(Value::Str(error)) = status(&w, "error") else { panic!("no error shown") };
     assert!(error.starts_with(&want), "{error}");
 }
+
+#[test]
+fn saving_the_file_reloads_the_module_and_a_broken_save_keeps_the_running_script() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("ops.js");
+    std::fs::write(&file, r#"mocu.write("out.version", 1);"#).unwrap();
+    // The reload waits for the file to be quiet on the server's clock: the system clock here.
+    let w = World::on_the_system_clock();
+    let mut h = host(&w);
+    let events = h.events();
+    h.start(&spec(&file)).unwrap();
+    let module = w.ds.resolve(&["modules", "ops"]).unwrap();
+    let (tx, rx) = crossbeam_channel::unbounded();
+    let _sub = w.ds.subscribe(mocu_dataserver::Topic::properties(module), move |n| {
+        let _ = tx.send((n.property_name().map(|p| p.to_string()), n.value().cloned()));
+    });
+    let wait_for = |prop: &str, want: Value| {
+        loop {
+            match rx.recv_timeout(std::time::Duration::from_secs(60)) {
+                Ok((Some(p), Some(v))) if p == prop && v == want => return,
+                Ok(_) => {}
+                Err(_) => panic!("{prop} never became {want:?}"),
+            }
+        }
+    };
+    std::fs::write(&file, r#"mocu.write("out.version", 2);"#).unwrap();
+    wait_for("generation", Value::Int(2));
+    assert_eq!(w.out("version"), Some(Value::Int(2)));
+
+    std::fs::write(&file, "mocu.write(\"out.version\",\n 3 +);").unwrap();
+    let want = format!("{}:2:", file.display());
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_secs(60)) {
+            Ok((Some(p), Some(Value::Str(e)))) if p == "error" && e.starts_with(&want) => break,
+            Ok(_) => {}
+            Err(_) => panic!("the broken save was not reported"),
+        }
+    }
+    assert_eq!(status(&w, "generation"), Some(Value::Int(2)), "the running script is kept");
+    let reported = events
+        .try_iter()
+        .any(|e| matches!(e, HostEvent::Message { text, .. } if text.starts_with(&want)));
+    assert!(reported, "the host was told");
+}

@@ -22,7 +22,15 @@ pub struct World {
 impl World {
     pub fn with_a_vehicle() -> World {
         let clock = ManualClock::new();
-        let ds = DataServer::with_clock(Config::default(), Arc::new(clock.clone()));
+        World::on(DataServer::with_clock(Config::default(), Arc::new(clock.clone())), clock)
+    }
+
+    /// The same world on the system clock (the clock given is not the server's).
+    pub fn on_the_system_clock() -> World {
+        World::on(DataServer::default(), ManualClock::new())
+    }
+
+    fn on(ds: DataServer, clock: ManualClock) -> World {
         let vehicles = ds.create_object(Guid::ROOT, ObjectInfo::new("vehicles", "folder")).unwrap();
         let usv = ds.create_object(vehicles, ObjectInfo::new("usv1", "usv")).unwrap();
         ds.create_property(usv, "speed", Value::Float(2.0), PropMeta::typed(ValueKind::Float))
