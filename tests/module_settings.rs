@@ -38,6 +38,7 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
         ("video", "silence_ms") | ("video", "max_width" | "max_height" | "max_unit_kb") => {
             640.into()
         }
+        ("distrib", "tls_ca" | "tls_cert" | "tls_key") => "".into(),
         (_, "kind") => kind.into(),
         _ => match ty {
             SettingType::Int => 1.into(),

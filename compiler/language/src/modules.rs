@@ -229,6 +229,25 @@ pub const MODULES: &[ModuleKind] = &[
                 "How long a joiner waits for the first snapshot, in ms",
             ),
             s(
+                "tls_ca",
+                String,
+                "none",
+                "PEM file of the CA that signs every peer's certificate (mutual TLS)",
+            ),
+            s(
+                "tls_cert",
+                String,
+                "none",
+                "PEM file of this site's certificate (its common name: the operator)",
+            ),
+            s("tls_key", String, "none", "PEM file of this site's private key"),
+            s(
+                "acl",
+                Names,
+                "none",
+                "Who may call this site's methods: [\"alice: vehicles\", \"bob: vehicles.usv2\"] (needs TLS)",
+            ),
+            s(
                 "control",
                 Bool,
                 "true where vehicles are shared",

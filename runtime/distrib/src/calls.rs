@@ -158,7 +158,7 @@ impl Drop for Unanswered {
             let outcome = if self.started.elapsed() >= self.timeout {
                 CallOutcome::TimedOut
             } else {
-                CallOutcome::Failed("no site answers this method (its adapter is gone)".into())
+                CallOutcome::Failed("no site answers this method (its adapter is gone, or its access control denies this operator)".into())
             };
             r.reply(outcome);
         }

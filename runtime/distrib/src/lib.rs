@@ -22,6 +22,7 @@ mod mirror;
 mod module;
 pub mod payload;
 mod publish;
+pub mod security;
 
 pub use mirror::MirrorStats;
 pub use module::register;
@@ -58,6 +59,8 @@ pub struct Config {
     pub lease: Duration,
     /// Control arbitration of the shared `vehicles` (`arbiter.rs`); `None`: off.
     pub control: Option<arbiter::Settings>,
+    /// Mutual TLS and access control (`security.rs`); the default: plain TCP, open.
+    pub security: security::Security,
 }
 
 impl Default for Config {
@@ -71,6 +74,7 @@ impl Default for Config {
             call_timeout: Duration::from_secs(10),
             lease: Duration::from_millis(2000),
             control: None,
+            security: security::Security::default(),
         }
     }
 }
@@ -102,6 +106,11 @@ pub fn zenoh_config(c: &Config) -> Result<zenoh::Config, String> {
         ("transport/link/tx/keep_alive", "4".into()),
         ("connect/retry", "{period_init_ms: 200, period_max_ms: 1000}".into()),
     ] {
+        z.insert_json5(k, &v).map_err(|e| format!("zenoh configuration `{k}`: {e}"))?;
+    }
+    let endpoints: Vec<String> = c.listen.iter().chain(&c.connect).cloned().collect();
+    let secured = security::zenoh_entries(&c.site, &c.security, &endpoints);
+    for (k, v) in secured.map_err(|e| e.to_string())? {
         z.insert_json5(k, &v).map_err(|e| format!("zenoh configuration `{k}`: {e}"))?;
     }
     Ok(z)

@@ -102,8 +102,10 @@ impl Mirror {
             match msg {
                 Inbound::Stop => break,
                 Inbound::Sample { key, put, bytes } => {
-                    if self.sample(&key, put, &bytes).is_err() {
-                        self.stats.malformed.fetch_add(1, Ordering::Relaxed);
+                    if let Err(e) = self.sample(&key, put, &bytes) {
+                        let n = self.stats.malformed.fetch_add(1, Ordering::Relaxed) + 1;
+                        let (ds, notify) = (&self.ds, self.notify.as_ref());
+                        crate::security::report_malformed(ds, self.status, notify, n, &key, &e.0);
                     } else {
                         self.stats.applied.fetch_add(1, Ordering::Relaxed);
                     }
@@ -142,9 +144,10 @@ impl Mirror {
                 }
             }
             Key::Property { site, path, name } if site != self.me => {
+                // Read first: a malformed sample leaves no object behind.
+                let sample = if put { Some(payload::property_from(bytes)?) } else { None };
                 let Some(local) = self.ensure(&site, &path, None) else { return Ok(()) };
-                if put {
-                    let (v, meta) = payload::property_from(bytes)?;
+                if let Some((v, meta)) = sample {
                     let v = self.local_value(&site, v);
                     self.write(local, &name, v, meta);
                 } else {

@@ -57,6 +57,7 @@ pub fn config_from(spec: &ModuleSpec) -> Result<(Config, Duration), String> {
         share,
         call_timeout: millis(spec, "call_timeout_ms", 10_000)?,
         lease: millis(spec, "lease_ms", 2_000)?,
+        security: crate::security::from_spec(spec)?,
     };
     Ok((config, millis(spec, "join_timeout_ms", 10_000)?))
 }
