@@ -3,6 +3,8 @@
 //! schemas (`--profile`, else the nearest `project.toml` above it). Exit 0: no errors; 1: errors (or warnings with
 //! `--deny warnings`); 2: usage or I/O error. The contract is in docs/language.md.
 
+mod scripts;
+
 use mocu_language::project::{self, Project};
 use mocu_language::{FileKind, FsLoader, Severity, SourceLoader, SourceMap, render};
 use std::collections::HashMap;
@@ -101,7 +103,11 @@ pub fn main(args: CheckArgs) -> ExitCode {
         if path.ends_with(".mocu") && covered.contains(&path) {
             continue;
         }
-        if mocu_language::file_kind(&path, &text) != FileKind::Layout {
+        let kind = mocu_language::file_kind(&path, &text);
+        if kind != FileKind::Layout {
+            if kind == FileKind::Profile {
+                scripts::check(&path, &text, &mut sources, &mut diags);
+            }
             mocu_language::check_path(&path, text, &FsLoader, &mut sources, &mut diags);
             continue;
         }
