@@ -346,14 +346,16 @@ fn raise(ds: &DataServer, severity: &str, text: &str) {
 }
 
 /// Every shipped layout at 800×480, 1280×720 and 1920×1080 with alerts raised (the
-/// built-in alert layer on top) and one vehicle's data stale (usv2; ugv1 in the handheld
-/// layout): nothing critical off-screen, strips and list within the screen.
+/// built-in alert layer on top) and the data of a vehicle it shows stale (usv1, whose
+/// gauges and header the usv and swap layouts show; ugv1 in the handheld layout; usv2, a
+/// strip and a list row, in the multi-USV one): nothing critical off-screen, strips and
+/// list within the screen, the veils on the stale vehicle's widgets only.
 #[test]
 fn every_shipped_layout_at_three_screen_sizes_with_alerts_and_stale_data() {
     // (file, golden name, the vehicle made stale, headers and heading tapes on screen)
     let layouts = [
-        ("usv.mocu", "usv", "usv2", 2),
-        ("fig1-swap.mocu", "fig1", "usv2", 0),
+        ("usv.mocu", "usv", "usv1", 2),
+        ("fig1-swap.mocu", "fig1", "usv1", 0),
         ("fig2-handheld.mocu", "fig2", "ugv1", 1),
         ("fig3-multi-usv.mocu", "fig3", "usv2", 1),
     ];
