@@ -134,7 +134,8 @@ impl std::fmt::Display for LoadError {
 }
 
 /// Reads, compiles and starts the file; replaces the running script only when the new one
-/// compiled. Its errors, now and later, go to the host's report and `root.modules.NAME.error`.
+/// compiled. Its errors, now and later, go to the host's report (the terminal), the trial
+/// record (`script_error`, the `--log` file) and `root.modules.NAME.error`.
 fn load(
     ctx: &ModuleContext,
     file: &str,
@@ -150,6 +151,16 @@ fn load(
     let c = ctx.clone();
     let report: Reporter = Arc::new(move |e: &ScriptError| {
         c.report(Level::Error, e.to_string());
+        c.record(
+            "script_error",
+            vec![
+                ("file", Value::str(&e.at.file)),
+                ("line", Value::Int(e.at.line.into())),
+                ("col", Value::Int(e.at.col.into())),
+                ("kind", Value::str(e.kind.describe())),
+                ("message", Value::str(&e.message)),
+            ],
+        );
         let _ = c.ds.set(c.status, "error", Value::str(&e.to_string()));
     });
     let source = Source::file(file, &text);

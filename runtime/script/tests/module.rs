@@ -103,13 +103,21 @@ fn an_error_while_running_is_reported_to_the_host_with_file_line_and_column() {
     let events = h.events();
     h.start(&spec(&file)).unwrap();
     w.ds.quiesce();
-    let messages: Vec<String> = events
-        .try_iter()
+    let events: Vec<HostEvent> = events.try_iter().collect();
+    let messages: Vec<&String> = events
+        .iter()
         .filter_map(|e| match e {
             HostEvent::Message { text, .. } => Some(text),
             _ => None,
         })
         .collect();
+    let recorded = events.iter().find_map(|e| match e {
+        HostEvent::Record { event, fields, .. } if event == "script_error" => Some(fields),
+        _ => None,
+    });
+    let field = |name: &str| recorded?.iter().find(|(k, _)| k == name).map(|(_, v)| v.clone());
+    // The refused call: `write` of `mocu.write(…)`, line 2, column 6.
+    assert_eq!((field("line"), field("col")), (Some(Value::Int(2)), Some(Value::Int(6))));
     let want = format!("{}:2:", file.display());
     assert!(messages.iter().any(|m| m.starts_with(&want) && m.contains("speed")), "{messages:?}");
     let Some(Value::Str(error)) = status(&w, "error") else { panic!("no error shown") };
