@@ -12,7 +12,7 @@ use crate::engine::{Engine, Instance, Limits};
 use crate::error::{ApiError, ErrorKind, Location, ScriptError, Source};
 use mocu_dataserver::{Guid, Value};
 use rquickjs::context::EvalOptions;
-use rquickjs::function::{Opt, Rest};
+use rquickjs::function::Opt;
 use rquickjs::{Array, Context, Ctx, Exception, Function, Object, Runtime};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -264,7 +264,6 @@ fn api_object<'js>(ctx: &Ctx<'js>, api: &Api) -> rquickjs::Result<Object<'js>> {
             a.after(ms, id).map_err(|e| throw(&ctx, &e))
         })?,
     )?;
-    let _ = Rest::<()>(Vec::new());
     Ok(m)
 }
 
