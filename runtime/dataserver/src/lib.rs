@@ -35,7 +35,7 @@ pub use error::{DsError, ObjRef};
 pub use executor::{Executor, Stats};
 pub use feed::{Change, ChangeFeed, FeedWaker, Stamped};
 pub use meta::{ObjectInfo, PropMeta};
-pub use method::{CallMode, CallOptions, CallOutcome, MethodSpec, ParamSpec};
+pub use method::{CallMode, CallOptions, CallOutcome, MethodSpec, ParamSpec, WRITE_AT_OWNER};
 pub use mocu_value::{Guid, PropName, Value, ValueKind};
 pub use notification::{Kind, Notification, Subject};
 pub use path::{DottedPath, PathEvent, PathWatch};

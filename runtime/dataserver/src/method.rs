@@ -10,6 +10,13 @@ use std::fmt;
 use std::sync::Arc;
 use std::time::Duration;
 
+/// The method an object publishes when its properties are owned by another process (a
+/// mirror of another site's object, docs/distribution.md "Forwarded writes"):
+/// `write_at_owner(name, value)` writes there, and a writer that finds it calls it instead
+/// of writing the local copy. The outcome is the owner's checked write (accepted, or refused
+/// with its reason); the value comes back through replication.
+pub const WRITE_AT_OWNER: &str = "write_at_owner";
+
 /// One parameter (or result) of a method.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ParamSpec {

@@ -79,6 +79,10 @@ impl Calls {
             Ok(r) => r,
             Err(e) => return reply_now(q, CallOutcome::Failed(format!("malformed call: {}", e.0))),
         };
+        if method == mocu_dataserver::WRITE_AT_OWNER {
+            let outcome = crate::writes::serve(&self.ds, self.arbiter.as_ref(), guid, &path, req);
+            return reply_now(q, outcome);
+        }
         let defaults = self
             .ds
             .methods(guid)

@@ -6,6 +6,7 @@
 //! - `publish.rs`: the change feed → puts and deletes; snapshots from what was published.
 //! - `mirror.rs`: other sites' samples → the local DataServer, through its API.
 //! - `calls.rs`: calls served for other sites and forwarded to them.
+//! - `writes.rs`: writes to another site's properties, forwarded to it and served there.
 //! - `keys.rs`, `payload.rs`: the key space and the JSON payloads other tools read.
 //! - `module.rs`: the `distrib` module of `mocu run` / `mocu serve`.
 //!
@@ -23,6 +24,7 @@ mod module;
 pub mod payload;
 mod publish;
 pub mod security;
+mod writes;
 
 pub use mirror::MirrorStats;
 pub use module::register;

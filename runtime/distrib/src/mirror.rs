@@ -204,6 +204,9 @@ impl Mirror {
                 (self.ds.create_object(parent, info).ok()?, true)
             }
         };
+        if owned {
+            crate::writes::proxy(&self.ds, &self.calls, site, path, local);
+        }
         let s = self.sites.entry(site.to_string()).or_default();
         s.objects.insert(path.to_vec(), Mirrored { local, owned });
         if let Some(rec) = rec {
