@@ -10,8 +10,9 @@
 use mocu_dataserver::{Config, DataServer, Guid, ManualClock, Value};
 use mocu_display::touch::TouchPhase;
 use mocu_display::{Clock, Display, DisplayOptions, PointerEvent};
-use mocu_host::ModuleContext;
+use mocu_host::{Module, ModuleContext};
 use mocu_layout::{Layout, LayoutConfig, NullSink};
+use mocu_mapdata::{MapDataConfig, MapDataModule};
 use mocu_sim::{Sim, SimConfig};
 use mocu_video::VideoWindows;
 use mocu_widgets::{Library, MapModule, RendererConfig, WidgetRenderer};
@@ -31,6 +32,7 @@ struct Figure {
     _renderer: WidgetRenderer,
     _map: MapModule,
     _video: VideoWindows,
+    _chart: MapDataModule,
 }
 
 impl Figure {
@@ -46,6 +48,12 @@ impl Figure {
         let ds = DataServer::with_clock(Config { workers: 2 }, Arc::new(clock.clone()));
         let opts = DisplayOptions::new(size.0, size.1).clock(Clock::manual());
         let display = Display::new(&ds, opts).unwrap();
+        // The simulator's harbour, as the shipped profile names it (layouts/project.toml).
+        let harbour =
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../layouts/maps/harbour.geojson");
+        let mut chart =
+            MapDataModule::new(MapDataConfig { overlays: vec![harbour], ..Default::default() });
+        chart.start(&ModuleContext::detached("map", ds.clone())).unwrap();
         let lib = Library::compile(program, true).unwrap();
         let steady = RendererConfig {
             accepted_for: Duration::from_secs(3600),
@@ -73,6 +81,7 @@ impl Figure {
             _renderer: renderer,
             _map: map,
             _video: video,
+            _chart: chart,
         };
         f.run(seconds);
         f
@@ -261,6 +270,10 @@ fn figure1_by_touch_at_every_screen_size_the_tapped_window_is_enlarged_under_its
 fn figure2_shows_the_ugv_its_arm_overlay_while_it_moves_and_answers_touch() {
     let mut f = Figure::new("fig2-handheld.mocu", (800, 480), 8.0);
     f.frame();
+    // The operator takes control of the UGV (its menu's "Take control"): the map marks it.
+    let ugv = f.ds.resolve(&["vehicles", "ugv1"]).unwrap();
+    let taken = f.ds.call_wait(ugv, "request_control", vec![Value::str("handheld")], None);
+    assert!(taken.is_accepted(), "{taken:?}");
     let overlay = f.ds.resolve(&["display", "armview"]).unwrap();
     let shown = |f: &Figure| f.ds.try_get(overlay, "visible".into()) == Some(Value::Bool(true));
     assert!(!shown(&f), "the arm still: no overlay");
