@@ -263,7 +263,7 @@ fn covered(t: Rect, texts: &[Rect]) -> f32 {
 
 /// The middle of the STALE tag (its box `tag` centred on the origin) of the widget with box
 /// `b` (window px) that drew `area` (widget-local): inside the area where it covers none of
-/// the widget's text, nearest to where it hides the least in a gauge — the middle of a short,
+/// the widget's text nor the 3 px (at the design's scale) beside it, nearest to where it hides the least in a gauge — the middle of a short,
 /// wide widget, high in the middle of a tall one; where the area has no such place (a
 /// short read-out whose caption and value fill it), just above or below it, on no other
 /// widget, within the damage margin; else inside, where it covers the least.
@@ -282,6 +282,11 @@ fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
         }
     };
     let at = |m: Point| Rect::new(m.x + tag.x, m.y + tag.y, tag.w, tag.h);
+    // The texts kept clear of, with a gap beside each: a tag flush against a value reads
+    // as one word with it ("STALE12.3 kn").
+    let gap = 3.0 * s;
+    let texts: Vec<Rect> =
+        room.texts.iter().map(|r| Rect::new(r.x - gap, r.y, r.w + 2.0 * gap, r.h)).collect();
     let (x0, x1) = span(area.x, area.w, tag.w / 2.0);
     let best_in = |y0: f32, y1: f32| {
         let step = (2.0 * s).max(1.0);
@@ -292,7 +297,7 @@ fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
             while x <= x1 + 0.01 {
                 let m = Point::new(x, y);
                 let d = (x - want.x).powi(2) + (y - want.y).powi(2);
-                let k = covered(at(m), room.texts);
+                let k = covered(at(m), &texts);
                 if (k, d) < (best.0, best.1) {
                     best = (k, d, m);
                 }
@@ -328,7 +333,7 @@ fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
                 let best = best_in(side.y, side.y);
                 (best.2.x, side.y, best.0)
             } else {
-                (side.x, side.y, covered(at(side), room.texts))
+                (side.x, side.y, covered(at(side), &texts))
             };
             let t = at(Point::new(x, y));
             let fits = k == 0.0
