@@ -44,7 +44,9 @@ pub enum Change {
     Deleted {
         object: Guid,
     },
-    /// A property created (`created`) or changed; `meta` is its metadata, if any.
+    /// A property created (`created`) or changed; `meta` is its metadata, if any, on
+    /// creation only (metadata never changes after it; a later write carries `None`, so a
+    /// busy writer and the feed's reader share no reference count).
     PropertySet {
         object: Guid,
         name: PropName,

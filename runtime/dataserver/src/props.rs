@@ -111,11 +111,12 @@ impl DataServer {
             return Ok(());
         }
         p.value = value.clone();
+        // Metadata never changes after creation: a reader has it from `created`.
         self.emit_at(now, || Change::PropertySet {
             object: guid,
             name,
             value: value.clone(),
-            meta: p.meta.clone(),
+            meta: None,
             created: false,
         });
         notify_prop(&os.prop_subs, guid, Kind::Changed, name, Some(value));

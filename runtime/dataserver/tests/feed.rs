@@ -41,12 +41,19 @@ fn a_change_is_stamped_when_it_happened_not_when_the_feed_is_read() {
 }
 
 #[test]
-fn a_write_equal_to_the_current_value_is_not_fed_and_a_typed_property_carries_its_metadata() {
+fn a_write_equal_to_the_current_value_is_not_fed_and_metadata_comes_with_the_creation_only() {
     let (ds, _clock) = manual();
     let o = object(&ds, "nav");
     let meta = PropMeta::typed(ValueKind::Float).units("m/s");
-    ds.create_property(o, "speed", Value::Float(0.0), meta).unwrap();
     let feed = ds.change_feed();
+    ds.create_property(o, "speed", Value::Float(0.0), meta).unwrap();
+    let created = feed.take();
+    let Some(Change::PropertySet { meta: Some(m), created: true, .. }) =
+        created.first().map(|s| &s.change)
+    else {
+        panic!("expected the creation with its metadata, got {created:?}");
+    };
+    assert_eq!(m.units.as_deref(), Some("m/s"));
     ds.set(o, "speed", Value::Float(2.0)).unwrap();
     ds.set(o, "speed", Value::Float(2.0)).unwrap();
     ds.set(o, "speed", Value::Int(3)).unwrap();
@@ -60,10 +67,7 @@ fn a_write_equal_to_the_current_value_is_not_fed_and_a_typed_property_carries_it
             other => panic!("expected a set, got {other:?}"),
         })
         .collect();
-    assert_eq!(
-        values,
-        vec![(Value::Float(2.0), Some("m/s".into())), (Value::Float(3.0), Some("m/s".into()))]
-    );
+    assert_eq!(values, vec![(Value::Float(2.0), None), (Value::Float(3.0), None)]);
 }
 
 #[test]

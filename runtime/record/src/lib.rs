@@ -180,13 +180,17 @@ impl Drop for Recorder {
     }
 }
 
+/// Nanoseconds since the Unix epoch (0 before it; saturating in the year 2554). Once per
+/// change: seconds and nanoseconds, not a 128-bit product.
 pub(crate) fn nanos(t: SystemTime) -> u64 {
-    t.duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos().min(u64::MAX as u128) as u64)
+    t.duration_since(UNIX_EPOCH).map_or(0, |d| {
+        d.as_secs().saturating_mul(1_000_000_000).saturating_add(u64::from(d.subsec_nanos()))
+    })
 }
 
 /// How long the writer lets changes gather after it is woken, so that a busy world is
 /// written in batches (one wake-up per batch, not per change).
-const GATHER: Duration = Duration::from_millis(5);
+const GATHER: Duration = Duration::from_millis(20);
 
 /// Writes every change queued now, then answers a [`Recorder::sync`].
 fn synced(
@@ -194,7 +198,7 @@ fn synced(
     feed: &ChangeFeed,
     done: Sender<()>,
 ) -> Result<(), String> {
-    for c in feed.take() {
+    for c in &feed.take() {
         t.change(c)?;
     }
     t.write_values()?;
@@ -226,9 +230,10 @@ fn write_loop(
         }
         let before = t.written();
         feed.swap(&mut taken);
-        for c in taken.drain(..) {
+        for c in &taken {
             t.change(c)?;
         }
+        taken.clear();
         t.write_values()?;
         let mut open = true;
         loop {
@@ -253,7 +258,7 @@ fn write_loop(
             dirty_since = None;
         }
     }
-    for c in feed.take() {
+    for c in &feed.take() {
         t.change(c)?;
     }
     t.finish()

@@ -45,21 +45,23 @@ pub(crate) fn numeric(v: &mocu_value::Value) -> Option<(u8, f64)> {
     }
 }
 
-/// The batch being gathered (columns, as the message lays them out).
+/// The batch being gathered: its columns as the message lays them out, little endian
+/// already, so that writing it is five copies.
 #[derive(Default)]
 pub(crate) struct Batch {
     first_seq: u64,
     first_ns: u64,
-    id: Vec<u32>,
-    seq: Vec<u32>,
-    dt: Vec<u32>,
+    len: usize,
+    id: Vec<u8>,
+    seq: Vec<u8>,
+    dt: Vec<u8>,
     kind: Vec<u8>,
-    value: Vec<f64>,
+    value: Vec<u8>,
 }
 
 impl Batch {
     pub fn is_empty(&self) -> bool {
-        self.id.is_empty()
+        self.len == 0
     }
 
     pub fn first(&self) -> (u64, u64) {
@@ -69,7 +71,7 @@ impl Batch {
     /// Whether an entry numbered `seq` at `t` fits (else: write this batch first).
     pub fn fits(&self, seq: u64, t: u64) -> bool {
         self.is_empty()
-            || (self.id.len() < MAX_ENTRIES
+            || (self.len < MAX_ENTRIES
                 && seq.wrapping_sub(self.first_seq) <= u64::from(u32::MAX)
                 && t.wrapping_sub(self.first_ns) <= u64::from(u32::MAX))
     }
@@ -80,37 +82,33 @@ impl Batch {
             self.first_seq = seq;
             self.first_ns = t;
         }
-        self.id.push(id);
-        self.seq.push(seq.wrapping_sub(self.first_seq) as u32);
-        self.dt.push(t.saturating_sub(self.first_ns) as u32);
+        self.len += 1;
+        self.id.extend_from_slice(&id.to_le_bytes());
+        self.seq.extend_from_slice(&(seq.wrapping_sub(self.first_seq) as u32).to_le_bytes());
+        self.dt.extend_from_slice(&(t.saturating_sub(self.first_ns) as u32).to_le_bytes());
         self.kind.push(kind);
-        self.value.push(value);
+        self.value.extend_from_slice(&value.to_le_bytes());
     }
 
     /// The batch as one CDR message (little endian) into `out`; the batch is emptied.
     pub fn encode(&mut self, out: &mut Vec<u8>) {
         out.clear();
-        out.reserve(48 + self.id.len() * 21);
+        out.reserve(48 + self.len * 21);
         let mut c = Cdr::start(out);
         c.u64(self.first_seq);
         c.u64(self.first_ns);
         for col in [&self.id, &self.seq, &self.dt] {
-            c.len(col.len());
-            for &x in col {
-                c.0.extend_from_slice(&x.to_le_bytes());
-            }
+            c.len(self.len);
+            c.0.extend_from_slice(col);
         }
         c.bytes(&self.kind);
-        c.len(self.value.len());
+        c.len(self.len);
         c.align(8);
-        for &x in &self.value {
-            c.0.extend_from_slice(&x.to_le_bytes());
+        c.0.extend_from_slice(&self.value);
+        self.len = 0;
+        for col in [&mut self.id, &mut self.seq, &mut self.dt, &mut self.kind, &mut self.value] {
+            col.clear();
         }
-        self.id.clear();
-        self.seq.clear();
-        self.dt.clear();
-        self.kind.clear();
-        self.value.clear();
     }
 }
 

@@ -194,8 +194,8 @@ impl World {
         }
     }
 
-    /// Sets a property; returns its id and whether the recording did not know it before
-    /// (a new id).
+    /// Sets a property (`meta`: given on creation, `None` on later writes); returns its id
+    /// and whether the recording did not know it before (a new id).
     pub fn set(
         &mut self,
         g: Guid,
@@ -207,7 +207,9 @@ impl World {
             && let Some(Some(s)) = self.slots.get_mut(id as usize)
         {
             s.value = value.clone();
-            if s.meta.as_ref().map(Arc::as_ptr) != meta.as_ref().map(Arc::as_ptr) {
+            // A later write carries no metadata (it never changes after creation).
+            if meta.is_some() && s.meta.as_ref().map(Arc::as_ptr) != meta.as_ref().map(Arc::as_ptr)
+            {
                 s.meta = meta.clone();
             }
             return (id, false);
@@ -219,6 +221,19 @@ impl World {
             o.props.push(id);
         }
         (id, true)
+    }
+
+    /// A new value of a property the recording knows; its id, or `None` when unknown.
+    pub fn update(&mut self, g: Guid, name: PropName, value: &Value) -> Option<u32> {
+        let id = *self.ids.get(&(g, name))?;
+        let s = self.slots.get_mut(id as usize)?.as_mut()?;
+        s.value = value.clone();
+        Some(id)
+    }
+
+    /// The metadata of property `id`, as it was created.
+    pub fn meta(&self, id: u32) -> Option<&PropMeta> {
+        self.slots.get(id as usize)?.as_ref()?.meta.as_deref()
     }
 
     /// Deletes a property; returns the id it had.
