@@ -7,6 +7,10 @@
 //! of edits sent at once is timed to the diagnostics of its last version (the ones before it
 //! are never checked).
 //!
+//! Wall time counts the machine's other load; beside it each keystroke's CPU time is given
+//! (the server's threads, from /proc/self/task/*/schedstat on Linux): what the keystroke cost,
+//! whatever else runs.
+//!
 //! `cargo run --release -p mocu-lsp --example latency [LINES]` (default 10000); figures:
 //! docs/editors.md ("Latency").
 
@@ -58,13 +62,16 @@ fn main() {
     let type_at =
         |v: i32| change(&client, &uri, v, line, col, if v % 2 == 0 { "x" } else { "" }, v % 2 == 1);
     let mut times = Vec::new();
+    let mut cpu = Vec::new();
     for v in 2..=41 {
-        let started = Instant::now();
+        let (started, cpu0) = (Instant::now(), server_cpu());
         type_at(v);
         wait(&client, &uri, v);
         times.push(started.elapsed());
+        cpu.push(server_cpu().saturating_sub(cpu0));
     }
     times.sort();
+    cpu.sort();
     let ms = |d: Duration| d.as_secs_f64() * 1000.0;
     let at = |q: f64| ms(times[((times.len() as f64 * q) as usize).min(times.len() - 1)]);
     println!(
@@ -74,6 +81,12 @@ fn main() {
         at(0.95),
         ms(times[0]),
         ms(times[times.len() - 1])
+    );
+    let cpu_at = |q: f64| ms(cpu[((cpu.len() as f64 * q) as usize).min(cpu.len() - 1)]);
+    println!(
+        "keystroke CPU time (the server's threads): median {:.1} ms, p95 {:.1} ms",
+        cpu_at(0.5),
+        cpu_at(0.95)
     );
 
     // A burst of 11 keystrokes sent at once: checked once, after the last.
@@ -112,6 +125,23 @@ fn main() {
     drop(client);
     let _ = thread.join();
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// CPU time used so far by the server's threads (all of this process's but the client's, which
+/// only waits); zero where /proc has no per-thread figures.
+fn server_cpu() -> Duration {
+    let me = std::fs::read_to_string("/proc/thread-self/stat").ok();
+    let my_tid = me.as_deref().and_then(|s| s.split_whitespace().next()).unwrap_or("");
+    let Ok(tasks) = std::fs::read_dir("/proc/self/task") else { return Duration::ZERO };
+    let mut ns = 0u64;
+    for t in tasks.flatten() {
+        if t.file_name().to_string_lossy() == my_tid {
+            continue;
+        }
+        let stat = std::fs::read_to_string(t.path().join("schedstat")).unwrap_or_default();
+        ns += stat.split_whitespace().next().and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+    }
+    Duration::from_nanos(ns)
 }
 
 fn send(c: &Connection, m: Message) {
