@@ -17,9 +17,11 @@
 
 mod context;
 mod host;
+mod process;
 mod spec;
 pub mod world;
 
 pub use context::{HostEvent, Level, ModuleContext};
 pub use host::{Events, Factory, Module, ModuleHost, Registry, StartError};
+pub use process::{ProcessModule, register as register_process};
 pub use spec::{ModuleSpec, SpecError};
