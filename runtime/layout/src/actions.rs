@@ -2,11 +2,14 @@
 //!
 //! Every call shows pending, then its outcome, on the control that issued it (`feedback`
 //! and `feedback_reason` properties of the widget), in `root.operator.feedback`, and in
-//! the event log. A refused write is feedback, never a crash.
+//! the event log. A refused write is feedback, never a crash. A `set` of a property another
+//! process owns (an object publishing `write_at_owner`, a mirror of another site's vehicle)
+//! is sent there instead of written here: it shows pending, then the owner's outcome, as a
+//! call does; the new value appears when the owner's change is replicated back.
 
 use crate::graph::{Builder, FnRef, Shared, State, eval_once, resolve};
 use crate::lower::{Base, LowerError, Lowerer, Scope, value_ty};
-use mocu_dataserver::{CallOutcome, MethodSpec, ObjectInfo, ParamSpec};
+use mocu_dataserver::{CallOutcome, DataServer, MethodSpec, ObjectInfo, ParamSpec, WRITE_AT_OWNER};
 use mocu_jit as jit;
 use mocu_language::program::{Action, Binding, SelectTarget, Shaping};
 use mocu_value::{Guid, Value, ValueKind};
@@ -137,6 +140,38 @@ pub(crate) fn operator_child(sh: &Shared, name: &str, kind: &str) -> Option<Guid
     crate::graph::ensure_object(&sh.ds, op, name, kind).ok()
 }
 
+/// Whether `obj`'s properties are owned by another process: a write goes there.
+fn owned_elsewhere(ds: &DataServer, obj: Guid) -> bool {
+    ds.methods(obj).is_ok_and(|ms| ms.iter().any(|m| m.name.as_str() == WRITE_AT_OWNER))
+}
+
+/// Shows a call's (or a write sent to its owner's) outcome when it arrives, as
+/// [`feedback`] and in the event log.
+fn outcome_feedback(
+    sh: &Arc<Shared>,
+    origin: Option<Guid>,
+    text: String,
+) -> impl FnOnce(CallOutcome) + Send + 'static {
+    let weak = Arc::downgrade(sh);
+    move |outcome: CallOutcome| {
+        let Some(sh) = weak.upgrade() else { return };
+        let reason = match &outcome {
+            CallOutcome::Refused(r) | CallOutcome::Failed(r) => r.clone(),
+            CallOutcome::Accepted(_) => String::new(),
+            other => other.to_string(),
+        };
+        feedback(&sh, origin, &text, outcome.label(), &reason);
+        sh.sink.record(
+            "feedback",
+            &[
+                ("target", Value::str(&text)),
+                ("outcome", Value::str(outcome.label())),
+                ("reason", Value::str(&reason)),
+            ],
+        );
+    }
+}
+
 /// Shows a call's state on the issuing control and in `root.operator.feedback`; a call
 /// that did not succeed is also an alert (`source` `command`), so the operator sees it
 /// whatever the layout shows.
@@ -184,6 +219,7 @@ pub(crate) fn run_actions(
                 let value =
                     eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input).remove(0);
                 let text = format!("{}.{property}", target_text(sh, base, objects, cx));
+                let mut at_owner = None;
                 let outcome =
                     match (start(sh, base, cx).and_then(|s| resolve(&sh.ds, s, objects)), &value) {
                         (_, None) => Err("the value is absent (no data)".to_string()),
@@ -191,6 +227,10 @@ pub(crate) fn run_actions(
                             "`{}` does not exist (yet)",
                             target_text(sh, base, objects, cx)
                         )),
+                        (Some(obj), Some(_)) if owned_elsewhere(&sh.ds, obj) => {
+                            at_owner = Some(obj);
+                            Ok(())
+                        }
                         (Some(obj), Some(v)) => {
                             sh.ds.set(obj, property.as_str(), v.clone()).map_err(|e| e.to_string())
                         }
@@ -198,8 +238,23 @@ pub(crate) fn run_actions(
                 let v = value.unwrap_or(Value::str("absent"));
                 sh.sink.record(
                     "action",
-                    &[("kind", Value::str("set")), ("target", Value::str(&text)), ("value", v)],
+                    &[
+                        ("kind", Value::str("set")),
+                        ("target", Value::str(&text)),
+                        ("value", v.clone()),
+                    ],
                 );
+                if let Some(obj) = at_owner {
+                    feedback(sh, cx.origin, &text, "pending", "");
+                    let args = vec![Value::str(property), v];
+                    sh.ds.call(
+                        obj,
+                        WRITE_AT_OWNER,
+                        args,
+                        None,
+                        outcome_feedback(sh, cx.origin, text.clone()),
+                    );
+                }
                 if let Err(why) = outcome {
                     feedback(sh, cx.origin, &text, "refused", &why);
                     sh.sink.record(
@@ -252,25 +307,7 @@ pub(crate) fn run_actions(
                     &[("target", Value::str(&text)), ("args", Value::list(args.clone()))],
                 );
                 feedback(sh, cx.origin, &text, "pending", "");
-                let weak = Arc::downgrade(sh);
-                let origin = cx.origin;
-                sh.ds.call(obj, method.as_str(), args, None, move |outcome: CallOutcome| {
-                    let Some(sh) = weak.upgrade() else { return };
-                    let reason = match &outcome {
-                        CallOutcome::Refused(r) | CallOutcome::Failed(r) => r.clone(),
-                        CallOutcome::Accepted(_) => String::new(),
-                        other => other.to_string(),
-                    };
-                    feedback(&sh, origin, &text, outcome.label(), &reason);
-                    sh.sink.record(
-                        "feedback",
-                        &[
-                            ("target", Value::str(&text)),
-                            ("outcome", Value::str(outcome.label())),
-                            ("reason", Value::str(&reason)),
-                        ],
-                    );
-                });
+                sh.ds.call(obj, method.as_str(), args, None, outcome_feedback(sh, cx.origin, text));
             }
             CompiledAction::Swap { a, b, ms } => {
                 sh.sink.record(
