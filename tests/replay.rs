@@ -109,3 +109,51 @@ fn a_file_that_is_not_a_recording_is_a_usage_error() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// The share of pixels of `png` in `x0..x1` × `y0..y1` that are sky blue (the simulator's
+/// camera sky: bright, blue well above red; the map's sea is dark).
+fn sky_share(png: &Path, (x0, x1): (u32, u32), (y0, y1): (u32, u32)) -> f64 {
+    let p = tiny_skia::Pixmap::load_png(png).expect("a PNG");
+    let mut sky = 0;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let c = p.pixel(x, y).expect("inside").demultiply();
+            let blue = u16::from(c.blue());
+            sky += usize::from(blue > 140 && blue > u16::from(c.red()) + 40);
+        }
+    }
+    sky as f64 / f64::from((x1 - x0) * (y1 - y0))
+}
+
+#[test]
+fn a_simulator_cameras_video_is_recorded_and_shown_again_in_the_replayed_video_window() {
+    let dir = tempfile::tempdir().unwrap();
+    let trial = dir.path().join("usv.mcap");
+    // layouts/usv.mocu shows usv1's drive camera full screen (sky above the horizon).
+    let o = Command::new(env!("CARGO_BIN_EXE_mocu"))
+        .args(["run", "layouts/usv.mocu", "--headless", "--frames", "60", "--size", "640x400"])
+        .args(["--mavlink", "off", "--video", "off", "--no-watch", "--record"])
+        .arg(&trial)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("mocu runs");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let shot = |layout: Option<&str>, name: &str| {
+        let png = dir.path().join(name);
+        let mut c = Command::new(env!("CARGO_BIN_EXE_mocu"));
+        c.arg("replay").arg(&trial).args(["--at", "0.8s", "--screenshot"]).arg(&png);
+        if let Some(l) = layout {
+            c.args(["--layout", l]);
+        }
+        let o = c.current_dir(env!("CARGO_MANIFEST_DIR")).env_remove("DISPLAY").output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        png
+    };
+    // The upper right of the screen, clear of the HUD: the camera's sky in the recorded
+    // layout; the map's dark sea through a layout without the video window.
+    let region = ((490, 630), (60, 200));
+    let video = sky_share(&shot(None, "video.png"), region.0, region.1);
+    let map = sky_share(&shot(Some("tests/replay/trial.mocu"), "map.png"), region.0, region.1);
+    assert!(video > 0.9, "the replayed video window shows the camera's sky ({video})");
+    assert!(map < 0.1, "without a video window the sky is not there ({map})");
+}
