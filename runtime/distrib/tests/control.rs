@@ -18,7 +18,9 @@ use std::time::Duration;
 
 const RELEASE: Duration = Duration::from_secs(5);
 
+mod sites;
 mod support;
+use sites::ocu;
 use support::{PATIENCE, free_port, until, watch};
 
 /// The adapter: usv1, whose holder is asked for a takeover, with a `stop` method.
@@ -41,20 +43,6 @@ fn adapter(port: u16) -> (DataServer, ManualClock, Distrib) {
     };
     let d = Distrib::start(&ds, &config, None).unwrap();
     (ds, clock, d)
-}
-
-fn ocu(name: &str, port: u16) -> (DataServer, Distrib) {
-    let ds = DataServer::default();
-    let config = Config {
-        site: name.into(),
-        operator: name.into(),
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        call_timeout: Duration::from_secs(15),
-        ..Config::default()
-    };
-    let d = Distrib::start(&ds, &config, None).unwrap();
-    assert!(d.wait_snapshots(1, PATIENCE), "{name}: the adapter's snapshot");
-    (ds, d)
 }
 
 /// Calls a method of a mirrored object; the outcome arrives on the receiver.

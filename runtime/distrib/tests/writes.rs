@@ -10,9 +10,10 @@ use mocu_dataserver::{
 };
 use mocu_distrib::arbiter::Settings;
 use mocu_distrib::{Config, Distrib};
-use std::time::Duration;
 
+mod sites;
 mod support;
+use sites::ocu;
 use support::{PATIENCE, free_port, until, watch};
 
 const USV1: [&str; 2] = ["vehicles", "usv1"];
@@ -32,20 +33,6 @@ fn adapter(port: u16) -> (DataServer, Distrib) {
         ..Config::default()
     };
     let d = Distrib::start(&ds, &config, None).unwrap();
-    (ds, d)
-}
-
-fn ocu(name: &str, port: u16) -> (DataServer, Distrib) {
-    let ds = DataServer::default();
-    let config = Config {
-        site: name.into(),
-        operator: name.into(),
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        call_timeout: Duration::from_secs(15),
-        ..Config::default()
-    };
-    let d = Distrib::start(&ds, &config, None).unwrap();
-    assert!(d.wait_snapshots(1, PATIENCE), "{name}: the adapter's snapshot");
     (ds, d)
 }
 
