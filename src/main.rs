@@ -14,6 +14,7 @@ mod golden;
 mod live_tree;
 mod logger;
 mod lsp;
+mod process_modules;
 mod record;
 mod replay;
 mod run;

@@ -184,6 +184,7 @@ pub fn registry() -> Registry {
     mocu_distrib::register(&mut r);
     mocu_mapdata::register(&mut r);
     mocu_script::register(&mut r);
+    mocu_host::register_process(&mut r);
     r
 }
 
@@ -219,6 +220,7 @@ pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
         }
     }
     crate::serve::add_distrib(&mut specs, &args.net, false);
+    crate::process_modules::connect(&mut specs);
     specs
 }
 

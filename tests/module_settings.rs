@@ -15,6 +15,7 @@ fn registry() -> Registry {
     mocu_distrib::register(&mut r);
     mocu_mapdata::register(&mut r);
     mocu_script::register(&mut r);
+    mocu_host::register_process(&mut r);
     r
 }
 
@@ -32,6 +33,7 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
         ("input", "script") | ("video", "camera") | ("map", "tiles") => "".into(),
         ("script", "file") => script_file().into(),
         ("script", "memory_kb") => 1024.into(),
+        ("process", "command") => toml::Value::Array(vec!["true".into()]),
         ("video", "source") => "127.0.0.1".into(),
         ("distrib", "takeover") => "ask".into(),
         ("distrib", "free") => "closed".into(),

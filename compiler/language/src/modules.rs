@@ -74,7 +74,7 @@ pub const COMMON: &[Setting] = &[
         "kind",
         String,
         "the table's NAME",
-        "Which module runs: sim, mavlink, video, codec, input, distrib, map or script",
+        "Which module runs: sim, mavlink, video, codec, input, distrib, map, script or process",
     ),
     s(
         "order",
@@ -315,6 +315,26 @@ pub const MODULES: &[ModuleKind] = &[
             ),
             s("memory_kb", Int, "16384", "Memory the script may hold, in KiB (64 to 4194304)"),
             s("files", Bool, "false", "Grants `import` of other scripts from the script's folder"),
+        ],
+    },
+    ModuleKind {
+        kind: "process",
+        description: "A module in any language run as a child process, joining over Zenoh (docs/modules.md)",
+        settings: &[
+            s(
+                "command",
+                Names,
+                "required",
+                "The program and its arguments, e.g. [\"python3\", \"examples/geofence.py\"]",
+            ),
+            s(
+                "connect",
+                String,
+                "the OCU's own endpoint",
+                "The Zenoh endpoint handed to the command as MOCU_CONNECT",
+            ),
+            s("restart_backoff_ms", Int, "500", "Wait before the first restart, in ms; doubles"),
+            s("max_backoff_ms", Int, "30000", "The longest wait between restarts, in ms"),
         ],
     },
 ];
