@@ -30,9 +30,11 @@ fn record(file: &std::path::Path) {
     rec.finish().unwrap();
 }
 
-/// Joins a receiver to the replayed camera; returns what it was sent: each frame's first
-/// pixel byte, its size and its pixel count.
-fn watch(p: &Player) -> Arc<Mutex<Vec<(u8, i64, i64, usize)>>> {
+/// What a receiver was sent: each frame's first pixel byte, its size and its byte count.
+type Received = Arc<Mutex<Vec<(u8, i64, i64, usize)>>>;
+
+/// Joins a receiver to the replayed camera; returns what it is sent.
+fn watch(p: &Player) -> Received {
     let ds = p.ds();
     let camera = ds.resolve(&["vehicles", "cameras", "drive"]).expect("the replayed camera");
     let sink = ds.create_object(Guid::ROOT, ObjectInfo::new("sink", "test")).unwrap();
@@ -52,7 +54,7 @@ fn watch(p: &Player) -> Arc<Mutex<Vec<(u8, i64, i64, usize)>>> {
     got
 }
 
-fn firsts(got: &Mutex<Vec<(u8, i64, i64, usize)>>) -> Vec<u8> {
+fn firsts(got: &Received) -> Vec<u8> {
     got.lock().unwrap().iter().map(|f| f.0).collect()
 }
 
