@@ -11,6 +11,11 @@
 //!    windowed display draws) and 60 Hz ticks (as `mocu run --headless` draws). Target:
 //!    ≤ 50 ms. Printed as a table (median, p95, max).
 //!
+//! 3. The simulator's camera path at 640×480 (issue 16): a drive camera's picture drawn by
+//!    the simulator, sent through the DataServer to the video painter, painted into a
+//!    640×480 video window and composited — against a memcpy of the frame's bytes (the least
+//!    a frame costs) and the simulator's picture alone, in the same run.
+//!
 //! `cargo bench --bench video [-- FILTER]`. Under `cargo test --benches` each decode
 //! benchmark runs once and the latency runs shrink to 2 s. Needs ffmpeg (Debian `ffmpeg`).
 
@@ -23,12 +28,15 @@ use criterion::{BenchmarkId, Criterion};
 use mocu_dataserver::{Call, DataServer, Guid, MethodSpec, ObjectInfo, Overflow, ParamSpec, Value};
 use mocu_display::{BackendChoice, Display, DisplayOptions, Rect};
 use mocu_host::{Module, ModuleContext};
+use mocu_sim::camera::{Lens, Pose, Renderer};
+use mocu_sim::{Sim, SimConfig, VehicleKind};
 use mocu_video::codec::DecoderHandle;
 use mocu_video::{
     EncodedUnit, ReceiverConfig, VideoReceiver, VideoWindows, attach_decoder, now_us,
 };
 use openh264::formats::YUVSource;
 use peer::{Ffmpeg, Kind};
+use std::hint::black_box;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
@@ -170,6 +178,97 @@ fn decode_benches(c: &mut Criterion) {
     }
 }
 
+/// The simulator with one USV whose drive camera (640×480, a frame every step) a 640×480
+/// video window of a CPU display shows (`source` empty: no window watches it, so no picture
+/// is drawn).
+struct CameraPath {
+    ds: DataServer,
+    sim: Sim,
+    display: Display,
+    windows: VideoWindows,
+    win: Guid,
+}
+
+impl CameraPath {
+    fn new(source: &str) -> CameraPath {
+        let (w, h) = (640u32, 480u32);
+        let ds = DataServer::default();
+        let cfg = SimConfig {
+            usv: 1,
+            ugv: 0,
+            uav: 0,
+            appear_every: 0.0,
+            autostart: true,
+            camera_fps: 20.0,
+            camera_width: w,
+            camera_height: h,
+            ..SimConfig::default()
+        };
+        let sim = Sim::new(ModuleContext::detached("sim", ds.clone()), cfg).unwrap();
+        let display = mocu_display::ensure_display_object(&ds, w, h).unwrap();
+        let win = mocu_display::publish_window(
+            &ds,
+            display,
+            "video",
+            "video",
+            0,
+            Rect::new(0.0, 0.0, w as f32, h as f32),
+        )
+        .unwrap();
+        ds.set(win, "source", Value::str(source)).unwrap();
+        let windows = VideoWindows::start(&ds).unwrap();
+        let display = Display::new(&ds, DisplayOptions::new(w, h).backend(BackendChoice::Cpu));
+        let mut p = CameraPath { ds, sim, display: display.unwrap(), windows, win };
+        p.sim.step(0.05);
+        p.ds.quiesce();
+        p.windows.refresh();
+        p.step();
+        p
+    }
+
+    /// One simulator step (drawing and sending the watched camera's picture), the frame
+    /// delivered to the painter, the display drawn.
+    fn step(&mut self) {
+        self.sim.step(0.05);
+        self.ds.quiesce();
+        self.display.frame();
+    }
+
+    fn shown_frame(&self) -> Option<i64> {
+        self.windows.shown(self.win).and_then(|s| s.frame)
+    }
+}
+
+fn camera_path_benches(c: &mut Criterion) {
+    let (w, h) = (640usize, 480usize);
+    let mut g = c.benchmark_group("camera_path/640x480");
+    let frame = vec![90u8; w * h * 3];
+    g.bench_function("baseline: memcpy of the frame (RGB8)", |b| {
+        b.iter(|| black_box(frame.clone()))
+    });
+    let r = Renderer::new(w as u32, h as u32, Lens::Drive, VehicleKind::Usv);
+    let mut heading = 0.0;
+    g.bench_function("sim drive camera render", |b| {
+        b.iter(|| {
+            heading = (heading + 1.7) % 360.0;
+            black_box(r.render(Pose { heading, pitch: 2.0, roll: 6.0, ..Pose::default() }))
+        })
+    });
+    let mut idle = CameraPath::new("");
+    g.bench_function("sim step, no camera watched", |b| b.iter(|| idle.step()));
+    let mut live = CameraPath::new("root.vehicles.usv1.cameras.drive");
+    let before = live.shown_frame();
+    live.step();
+    assert!(
+        live.shown_frame().is_some() && live.shown_frame() != before,
+        "each step shows a new frame in the window"
+    );
+    g.bench_function("sim step + render + send + video window paint + composite", |b| {
+        b.iter(|| live.step())
+    });
+    g.finish();
+}
+
 /// Latencies (ms) from packet arrival to the composited frame showing it.
 fn latency(kind: Kind, secs: u32, tick: Option<Duration>) -> (Vec<f64>, u64) {
     let ds = DataServer::default();
@@ -287,6 +386,10 @@ fn main() {
     if filter.as_deref().is_none_or(|f| "decode".contains(f) || f.contains("decode")) {
         decode_benches(&mut c);
     }
-    latency_table(filter.as_deref().filter(|f| !f.contains("decode")));
+    if filter.as_deref().is_none_or(|f| "camera_path".contains(f) || f.contains("camera_path")) {
+        camera_path_benches(&mut c);
+    }
+    let table = filter.as_deref().filter(|f| !f.contains("decode") && !f.contains("camera_path"));
+    latency_table(table);
     c.final_summary();
 }
