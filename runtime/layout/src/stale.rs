@@ -70,8 +70,9 @@ pub(crate) fn widget_stale(lw: &mut Lowerer, through: &[(Source, jit::Ty)]) -> O
 /// `DataServer::received_at`) for that input's period ([`period`]: the schema's
 /// `stale_after`, the vehicle's, or three periods of the rate its module declared). One delayed
 /// call per widget on the server's clock, armed when the widget's data first arrives and
-/// re-armed for the next deadline; once aged, no timer runs: the next changed value makes it
-/// fresh (an unchanged write after aging is not seen until then — nothing polls).
+/// re-armed for the next deadline; once aged, a changed value makes it fresh at once, and the
+/// check still comes back once per period ([`MIN_POLL`] at least), so that a publisher that
+/// resumes with unchanged values (a stopped boat) makes it fresh too.
 pub(crate) struct Age {
     /// (base, object names, property) of each input the age applies to.
     inputs: Vec<(Base, Vec<String>, String)>,
@@ -183,6 +184,9 @@ impl crate::LayoutConfig {
     }
 }
 
+/// The shortest wait between two looks at an aged widget's inputs.
+const MIN_POLL: Duration = Duration::from_millis(250);
+
 /// Compares each input's last write with its vehicle's period; writes `aged` when that
 /// changes; arms the next check (the earliest deadline, or one period while aged).
 fn check(sh: &Arc<Shared>, g: Guid) {
@@ -198,15 +202,19 @@ fn check(sh: &Arc<Shared>, g: Guid) {
     }
     let now = ds.now();
     let (mut old, mut next): (bool, Option<Duration>) = (false, None);
+    // While aged, the check comes back once per period of the aged inputs: a publisher that
+    // resumes with unchanged values (a stopped boat whose link came back) changes no output,
+    // so only a look at `received_at` can see that it is fresh again.
+    let mut poll: Option<Duration> = None;
     for (base, objects, property) in &inputs {
         let Some((vehicle, obj)) = objects_of(ds, base, objects, instance) else { continue };
         let Some(p) = period(sh, vehicle, obj, property) else { continue };
         let Some(at) = ds.received_at(obj, property.as_str()).ok().flatten() else { continue };
         let age = now.saturating_duration_since(at);
-        // An input that aged needs no more timers (nothing polls): its next changed value
-        // makes the widget fresh again (`on_output`).
         if age >= p {
             old = true;
+            let p = p.max(MIN_POLL);
+            poll = Some(poll.map_or(p, |n: Duration| n.min(p)));
             continue;
         }
         let wait = p - age;
@@ -215,13 +223,14 @@ fn check(sh: &Arc<Shared>, g: Guid) {
     let changed = {
         let mut ages = sh.ages.lock();
         let Some(a) = ages.get_mut(&g) else { return };
-        a.armed = next.is_some() && !old;
+        a.armed = if old { poll.is_some() } else { next.is_some() };
         std::mem::replace(&mut a.aged, old) != old
     };
     if changed {
         let _ = ds.set(g, "aged", Value::Bool(old));
     }
-    if let (Some(wait), false) = (next, old) {
+    let wait = if old { poll } else { next };
+    if let Some(wait) = wait {
         let weak = Arc::downgrade(sh);
         ds.run_after(wait, Some(&sh.exec), move || {
             if let Some(sh) = weak.upgrade() {

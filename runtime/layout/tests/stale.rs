@@ -82,7 +82,7 @@ fn a_template_instance_is_stale_with_its_own_vehicle_only() {
 /// number it reads has received no write for that long — an unchanged write keeps it fresh.
 /// Time is the DataServer's manual clock.
 #[test]
-fn data_that_stops_arriving_ages_after_its_vehicles_declared_period_and_unchanged_writes_keep_it_fresh()
+fn data_that_stops_arriving_ages_after_its_vehicles_declared_period_and_unchanged_writes_keep_or_make_it_fresh()
  {
     let clock = Arc::new(ManualClock::new());
     let ds = DataServer::with_clock(Config { workers: 2 }, clock.clone());
@@ -104,7 +104,18 @@ fn data_that_stops_arriving_ages_after_its_vehicles_declared_period_and_unchange
     assert_eq!(aged(&ds), Some(Value::Bool(true)), "nothing for 1.1 s: aged");
     clock.advance(Duration::from_secs(60));
     layout.settle();
-    assert_eq!(aged(&ds), Some(Value::Bool(true)), "no timer while aged: nothing to redo");
+    assert_eq!(aged(&ds), Some(Value::Bool(true)), "still nothing: still aged");
+    // The publisher resumes with the same value (a stopped boat whose writes came back):
+    // no output changes, yet the widget is fresh again within one period.
+    ds.set(nav1, "speed", Value::Float(0.0)).unwrap();
+    layout.settle();
+    clock.advance(Duration::from_millis(1000));
+    ds.set(nav1, "speed", Value::Float(0.0)).unwrap();
+    layout.settle();
+    assert_eq!(aged(&ds), Some(Value::Bool(false)), "unchanged writes resumed: fresh again");
+    clock.advance(Duration::from_millis(1100));
+    layout.settle();
+    assert_eq!(aged(&ds), Some(Value::Bool(true)), "and aged again when they stop");
     ds.set(nav1, "speed", Value::Float(2.0)).unwrap();
     layout.settle();
     assert_eq!(aged(&ds), Some(Value::Bool(false)), "a new value: fresh at once");
