@@ -325,3 +325,60 @@ fn a_non_holders_command_is_refused_takeovers_follow_each_vehicles_policy_and_a_
     assert_eq!((holder("usv1"), holder("usv2")), (J::from("bob"), J::from("")));
     drop(adapter);
 }
+
+/// The pid in the supervisor's `started `…` (pid N)` line.
+fn child_pid(line: &str) -> String {
+    let at = line.rfind("(pid ").expect("a pid") + 5;
+    line[at..].trim_end_matches(')').to_string()
+}
+
+#[test]
+fn a_python_process_module_stops_a_vehicle_leaving_its_zone_and_is_restarted_after_a_crash() {
+    let check = Command::new("python3").args(["-c", "import zenoh"]).output();
+    assert!(check.is_ok_and(|o| o.status.success()), "needs python3 with eclipse-zenoh 1.10.2");
+    let ocu = Proc::start(&[
+        "run",
+        "tests/distrib/geofence.toml",
+        "--headless",
+        "--no-watch",
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+        "--frames",
+        "36000",
+        "--dump",
+        "root",
+    ]);
+    // The module joins the OCU, sees usv1 patrol out of its 5 m leash, alerts and stops it.
+    let n = ocu.wait_line(0, "the module joining", |l| l.contains("site `geofence` joined"));
+    let n = ocu.wait_line(n, "the alert", |l| l.contains("geofence: ALERT usv1 left its zone"));
+    let n = ocu.wait_line(n, "stop() accepted", |l| {
+        l.contains("geofence: usv1.stop()") && l.contains("\"accepted\"")
+    });
+    // A crash: the OCU shows the module's object stale and restarts it.
+    let started = {
+        let lines = ocu.lines.0.lock().unwrap();
+        lines.iter().find(|l| l.contains("started `python3")).cloned().expect("started line")
+    };
+    let killed = Command::new("kill").args(["-KILL", &child_pid(&started)]).status();
+    assert!(killed.is_ok_and(|s| s.success()));
+    // Two watchers of one event (the supervisor, the distribution layer): either may print first.
+    let exit =
+        ocu.wait_line(n, "the exit", |l| l.contains("exited (signal 9); restarting in 200 ms"));
+    let stale = "site `geofence` is gone: 1 of its objects shown stale";
+    ocu.wait_line(n, "its object stale", |l| l.contains(stale));
+    let n = ocu.wait_line(exit, "the restart", |l| l.contains("restarted `python3"));
+    ocu.wait_line(n, "the module back", |l| l.contains("site `geofence` joined"));
+    ocu.signal("-TERM");
+    let (out, lines) = ocu.finish();
+    assert!(out.status.success(), "the OCU failed:\n{}", lines.join("\n"));
+    let root: J = serde_json::from_slice(&out.stdout).expect("--dump is JSON");
+    let fence = child(&root, "geofence");
+    assert_eq!(fence["properties"]["stale"], J::Bool(false), "fresh again: {fence}");
+    let status = child(child(&root, "modules"), "geofence");
+    assert_eq!(status["properties"]["restarts"], 1, "{status}");
+    assert_eq!(status["properties"]["state"], "running", "{status}");
+    let nav = child(child(child(&root, "vehicles"), "usv1"), "nav");
+    assert_eq!(nav["properties"]["goal_throttle"], 0.0, "usv1 stopped: {nav}");
+}
