@@ -2,19 +2,27 @@
 //! exiting, after a back-off that doubles up to its cap on the DataServer's clock, and the
 //! OCU goes on. Real child processes; the clock is a ManualClock the test advances.
 
-use mocu_dataserver::{Config, DataServer, ManualClock, Value};
+use mocu_dataserver::{Config, DataServer, ManualClock, Topic, Value};
 use mocu_host::{Module, ModuleContext, ModuleSpec, ProcessModule};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
-/// Waits (on real time, bounded generously) until `cond` holds: a child process's exit is
-/// real, not on the test's clock.
-fn wait_for(what: &str, mut cond: impl FnMut() -> bool) {
-    let deadline = Instant::now() + Duration::from_secs(60);
+/// Waits until `cond` holds, looking again at each change of the module's status object (a
+/// child process's exit is real, not on the test's clock); a status that stops changing for
+/// a minute fails the test instead of hanging it.
+fn wait_for(ds: &DataServer, ctx: &ModuleContext, what: &str, mut cond: impl FnMut() -> bool) {
+    let (tx, rx) = crossbeam_channel::unbounded();
+    let sub = ds
+        .subscribe(Topic::properties(ctx.status), move |_| {
+            let _ = tx.send(());
+        })
+        .unwrap();
     while !cond() {
-        assert!(Instant::now() < deadline, "never happened: {what}");
-        std::thread::sleep(Duration::from_millis(5));
+        if rx.recv_timeout(Duration::from_secs(60)).is_err() {
+            panic!("never happened: {what}");
+        }
     }
+    ds.unsubscribe(sub);
 }
 
 fn status(ds: &DataServer, ctx: &ModuleContext, key: &str) -> Option<Value> {
@@ -44,8 +52,10 @@ fn a_crashing_command_is_restarted_with_a_doubling_back_off_and_the_ocu_goes_on(
 
     // Each exit is seen, then the next start waits for the back-off on the clock.
     for (restarts, backoff) in [(0, 100), (1, 200), (2, 400), (3, 400)] {
-        wait_for("the child's exit", || {
-            text(&ds, &ctx, "state") == "down" && int(&ds, &ctx, "restarts") == restarts
+        wait_for(&ds, &ctx, "the child's exit", || {
+            text(&ds, &ctx, "state") == "down"
+                && int(&ds, &ctx, "restarts") == restarts
+                && int(&ds, &ctx, "next_start_in_ms") == backoff
         });
         assert_eq!(text(&ds, &ctx, "last_exit"), "exit 3");
         assert_eq!(int(&ds, &ctx, "next_start_in_ms"), backoff);
@@ -53,7 +63,7 @@ fn a_crashing_command_is_restarted_with_a_doubling_back_off_and_the_ocu_goes_on(
         ds.quiesce();
         assert_eq!(int(&ds, &ctx, "restarts"), restarts, "restarted before its back-off");
         clock.advance(Duration::from_millis(1));
-        wait_for("the restart", || int(&ds, &ctx, "restarts") == restarts + 1);
+        wait_for(&ds, &ctx, "the restart", || int(&ds, &ctx, "restarts") == restarts + 1);
     }
 
     // The OCU is untouched: its DataServer still works, and stop ends the supervision.
@@ -79,8 +89,10 @@ fn a_command_that_cannot_start_is_retried_and_reported() {
     assert!(text(&ds, &ctx, "last_exit").starts_with("cannot start"));
     assert_eq!(int(&ds, &ctx, "next_start_in_ms"), 500);
     clock.advance(Duration::from_millis(500));
-    wait_for("the second try", || int(&ds, &ctx, "restarts") == 1);
-    assert_eq!(int(&ds, &ctx, "next_start_in_ms"), 1000);
+    // The second failure doubles the wait (the status's properties are written one by one).
+    wait_for(&ds, &ctx, "the second try, a doubled wait", || {
+        int(&ds, &ctx, "restarts") == 1 && int(&ds, &ctx, "next_start_in_ms") == 1000
+    });
     m.stop();
 }
 
