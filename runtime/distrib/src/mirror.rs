@@ -256,12 +256,20 @@ impl Mirror {
     fn write(&self, local: Guid, name: &str, v: Value, meta: Option<PropMeta>) {
         let name = PropName::new(name);
         let exists = self.ds.try_get(local, name).is_some();
-        if !exists && let Some(mut m) = meta {
+        if let Some(mut m) = meta {
             // Staleness across the network is liveliness's job: a mirror receives no
             // equal writes, so the publisher's rate would age every steady value.
             m.rate_hz = None;
-            if self.ds.create_property(local, name, v.clone(), m).is_ok() {
-                return;
+            // A value can arrive before the record that carries its metadata (an update
+            // overtaking a late joiner's snapshot): the metadata, when it comes, replaces
+            // what the bare value was created with, so units are never lost for good.
+            if self.ds.meta(local, name).ok().as_ref() != Some(&m) {
+                if exists {
+                    let _ = self.ds.delete_property(local, name);
+                }
+                if self.ds.create_property(local, name, v.clone(), m).is_ok() {
+                    return;
+                }
             }
         }
         if self.ds.set(local, name, v.clone()).is_err() {
