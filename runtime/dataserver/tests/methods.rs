@@ -162,7 +162,9 @@ fn a_handler_may_answer_later_from_another_thread_or_time_out() {
         move |out| tx.send(out).unwrap(),
     );
     clock.advance(Duration::from_millis(50));
-    assert_eq!(rx.try_recv(), Ok(CallOutcome::TimedOut));
+    // The timeout is answered on the timer thread: wait for that answer (bounded only so that
+    // a lost answer fails instead of hanging).
+    assert_eq!(rx.recv_timeout(Duration::from_secs(30)), Ok(CallOutcome::TimedOut));
     ack_tx.send(()).unwrap();
     ds.quiesce();
     assert!(rx.try_recv().is_err(), "the late acknowledgement answers nobody");

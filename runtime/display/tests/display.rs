@@ -218,11 +218,14 @@ fn a_click_on_a_transparent_hud_pixel_reaches_the_map_below() {
     let (ds, mut d) = world(640, 400);
     let (map, hud) = two_modules(&ds, &d);
     let clicks = Arc::new(parking_lot::Mutex::new(Vec::new()));
+    // As a module does, on a serial executor: queued calls on the pool may run in any order
+    // (docs/dataserver.md), and the order asserted here is the display's, in which it sends.
+    let exec = ds.serial_executor();
     for (g, who) in [(map, "map"), (hud, "hud")] {
         let clicks = clicks.clone();
-        ds.publish_method_fn(g, pointer_spec(), move |a| {
-            clicks.lock().push(format!("{who}:{}", a[0].as_str().unwrap()));
-            CallOutcome::Accepted(vec![])
+        ds.publish_method_on(&exec, g, pointer_spec(), move |call| {
+            clicks.lock().push(format!("{who}:{}", call.args[0].as_str().unwrap()));
+            call.responder.reply(CallOutcome::Accepted(vec![]));
         })
         .unwrap();
     }
