@@ -37,19 +37,22 @@ fn a_layout_passes_whole_numbers_to_int_parameters_and_objects_as_their_guid() {
         let seen: Calls = Arc::default();
         let record = |name: &'static str| {
             let seen = seen.clone();
-            move |args: &[Value]| {
-                seen.lock().unwrap().push((name.to_string(), args.to_vec()));
-                CallOutcome::Accepted(vec![])
+            move |call: Call| {
+                seen.lock().unwrap().push((name.to_string(), call.args.to_vec()));
+                call.responder.reply(CallOutcome::Accepted(vec![]));
             }
         };
+        // As the vehicle's module does, on its serial executor: calls queued on the pool may
+        // run in any order (docs/dataserver.md); the order asserted is the layout's.
+        let exec = ds.serial_executor();
         let insert = MethodSpec::new("insert_waypoint")
             .param(ParamSpec::new("index", ValueKind::Int))
             .param(ParamSpec::new("a", ValueKind::Float))
             .param(ParamSpec::new("b", ValueKind::Float));
-        ds.publish_method_fn(survey, insert, record("insert")).unwrap();
+        ds.publish_method_on(&exec, survey, insert, record("insert")).unwrap();
         let upload =
             MethodSpec::new("upload_route").param(ParamSpec::new("route", ValueKind::Guid));
-        ds.publish_method_fn(v, upload, record("upload")).unwrap();
+        ds.publish_method_on(&exec, v, upload, record("upload")).unwrap();
         let dir = tempfile::tempdir().unwrap();
         let config =
             LayoutConfig { tick: Duration::from_millis(1), jit, ..LayoutConfig::default() };
