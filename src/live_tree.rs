@@ -59,7 +59,10 @@ impl LiveTree for WorldMirror {
                 value,
             });
         }
-        for m in self.ds.methods(at).ok()? {
+        // `write_at_owner` is the mirror's plumbing for `set` (docs/distribution.md), not
+        // a method a layout calls.
+        let methods = self.ds.methods(at).ok()?;
+        for m in methods.iter().filter(|m| m.name.as_str() != mocu_dataserver::WRITE_AT_OWNER) {
             out.push(LiveChild {
                 name: m.name.as_str().to_string(),
                 kind: MemberKind::Method,

@@ -127,6 +127,8 @@ async def test_completion_of_a_property_shows_its_current_value(client: Language
 
     speed = await until("the speed's current value in its completion", with_value)
     assert speed.detail.startswith("number (m/s)") and " · now " in speed.detail, speed.detail
+    labels = await completion_labels(client, uri, line, col)
+    assert "write_at_owner" not in labels, "the mirror's plumbing for `set` is not offered"
 
 
 async def test_hover_shows_the_current_value_its_units_and_age(client: LanguageClient, project):
