@@ -54,18 +54,25 @@ fn watch(p: &Player) -> Received {
     got
 }
 
-fn firsts(got: &Received) -> Vec<u8> {
-    got.lock().unwrap().iter().map(|f| f.0).collect()
-}
-
-#[test]
-fn a_pixel_cameras_recorded_frames_are_sent_again_at_their_times() {
+/// A recording of the camera, replayed to its start, with a receiver joined; the folder
+/// holding the file lives as long as the returned guard.
+fn replaying() -> (tempfile::TempDir, Player, Received) {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("t.mcap");
     record(&file);
     let mut p = Player::open(&file).unwrap();
     p.advance_to(p.start_ns()).unwrap();
     let got = watch(&p);
+    (dir, p, got)
+}
+
+fn firsts(got: &Received) -> Vec<u8> {
+    got.lock().unwrap().iter().map(|f| f.0).collect()
+}
+
+#[test]
+fn a_pixel_cameras_recorded_frames_are_sent_again_at_their_times() {
+    let (_dir, mut p, got) = replaying();
     p.advance_to(p.at_secs(0.15)).unwrap();
     assert_eq!(firsts(&got), vec![1]);
     p.advance_to(p.at_secs(0.35)).unwrap();
@@ -75,12 +82,7 @@ fn a_pixel_cameras_recorded_frames_are_sent_again_at_their_times() {
 
 #[test]
 fn a_seek_shows_each_cameras_last_frame_before_it() {
-    let dir = tempfile::tempdir().unwrap();
-    let file = dir.path().join("t.mcap");
-    record(&file);
-    let mut p = Player::open(&file).unwrap();
-    p.advance_to(p.start_ns()).unwrap();
-    let got = watch(&p);
+    let (_dir, mut p, got) = replaying();
     // A jump back is a seek (keyframe, then the changes after it).
     p.advance_to(p.at_secs(0.5)).unwrap();
     got.lock().unwrap().clear();

@@ -22,7 +22,8 @@ import pytest_lsp
 from lsprotocol import types
 from pytest_lsp import ClientServerConfig, LanguageClient
 
-from test_mocu_lsp import LAYOUT, PROFILE, SCHEMA, at, completion_labels, diagnostics_of, open_layout
+# `project` is the same fixture (the profile, its schema and the layout in a temporary folder).
+from test_mocu_lsp import LAYOUT, at, completion_labels, diagnostics_of, open_layout, project  # noqa: F401
 
 MOCU = os.environ["MOCU_BIN"]
 REPO = pathlib.Path(__file__).resolve().parents[3]
@@ -64,14 +65,6 @@ def adapter():
     yield endpoint
     proc.kill()
     proc.wait()
-
-
-@pytest.fixture
-def project(tmp_path: pathlib.Path) -> pathlib.Path:
-    (tmp_path / "project.toml").write_text(PROFILE)
-    (tmp_path / "vehicles.toml").write_text(SCHEMA)
-    (tmp_path / "hud.mocu").write_text(LAYOUT)
-    return tmp_path
 
 
 @pytest_lsp.fixture(config=ClientServerConfig(server_command=[MOCU, "lsp"]))
