@@ -65,7 +65,8 @@ pub fn keyboard(ds: &DataServer, controls: crossbeam_channel::Sender<Control>) -
     let kb = ensure(inputs, "keyboard", "keyboard")?;
     let spec = MethodSpec::new("key")
         .param(ParamSpec::new("name", ValueKind::String))
-        .param(ParamSpec::new("pressed", ValueKind::Bool));
+        .param(ParamSpec::new("pressed", ValueKind::Bool))
+        .ordered();
     let _ = ds.publish_method_fn(kb, spec, move |args| {
         let pressed = args.get(1).and_then(|v| v.as_bool()).unwrap_or(false);
         let name = args.first().and_then(|v| v.as_str()).unwrap_or("");

@@ -87,6 +87,11 @@ pub struct MethodSpec {
     pub results: Vec<ParamSpec>,
     pub defaults: CallOptions,
     pub description: Option<Arc<str>>,
+    /// Queued calls run one at a time in the order they were made, even when the handler is
+    /// published without a serial executor of its own (the DataServer gives it one): for
+    /// event streams such as pointer and key input, where a press overtaken by its release
+    /// would be a different gesture.
+    pub ordered: bool,
 }
 
 impl MethodSpec {
@@ -97,6 +102,7 @@ impl MethodSpec {
             results: Vec::new(),
             defaults: CallOptions::default(),
             description: None,
+            ordered: false,
         }
     }
 
@@ -112,6 +118,12 @@ impl MethodSpec {
 
     pub fn defaults(mut self, o: CallOptions) -> MethodSpec {
         self.defaults = o;
+        self
+    }
+
+    /// Calls to this method run in the order they were made (see [`MethodSpec::ordered`]).
+    pub fn ordered(mut self) -> MethodSpec {
+        self.ordered = true;
         self
     }
 
@@ -229,6 +241,10 @@ impl DataServer {
         executor: Option<Executor>,
         handler: Handler,
     ) -> Result<(), DsError> {
+        let executor = match executor {
+            None if spec.ordered => Some(self.serial_executor()),
+            e => e,
+        };
         let o = self.object(guid)?;
         let mut os = o.state.write();
         if !os.alive {

@@ -211,3 +211,31 @@ fn periodic_work_rearms_a_delayed_call_without_a_thread_of_its_own() {
     assert_eq!(n.load(Ordering::SeqCst), 5, "stops when no longer re-armed");
     assert_eq!(ds.pending_timers(), 0);
 }
+
+#[test]
+fn an_ordered_methods_queued_calls_run_one_at_a_time_in_the_order_they_were_made() {
+    // Pointer and key input: a release that overtook its press would be another gesture.
+    // The first call blocks until every other one is queued; on the bare pool the others
+    // would run meanwhile, on the spec's own serial executor they wait their turn.
+    let ds = DataServer::default();
+    let v = ds.create_object(Guid::ROOT, ObjectInfo::new("window", "window")).unwrap();
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let (release_tx, release_rx) = crossbeam_channel::bounded::<()>(1);
+    let (seen2, release_rx) = (seen.clone(), Mutex::new(release_rx));
+    let spec = MethodSpec::new("pointer").param(ParamSpec::new("n", ValueKind::Int)).ordered();
+    ds.publish_method_fn(v, spec, move |args| {
+        let n = args[0].as_i64().unwrap();
+        if n == 0 {
+            let _ = release_rx.lock().unwrap().recv();
+        }
+        seen2.lock().unwrap().push(n);
+        CallOutcome::Accepted(vec![])
+    })
+    .unwrap();
+    for n in 0..64 {
+        ds.call(v, "pointer", vec![Value::Int(n)], None, |_| {});
+    }
+    release_tx.send(()).unwrap();
+    ds.quiesce();
+    assert_eq!(*seen.lock().unwrap(), (0..64).collect::<Vec<_>>());
+}

@@ -89,6 +89,7 @@ pub fn pointer_spec() -> MethodSpec {
         .param(ParamSpec::new("button", ValueKind::Int))
         .param(ParamSpec::new("x", ValueKind::Float))
         .param(ParamSpec::new("y", ValueKind::Float))
+        .ordered()
         .describe("Pointer input, window-local: kind (enter, move, leave, down, up), button (0 left, 1 right, 2 middle, -1 none), x, y")
 }
 

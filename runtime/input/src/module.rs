@@ -330,7 +330,8 @@ impl Shared {
                 "key",
                 MethodSpec::new("key")
                     .param(p("name", ValueKind::String))
-                    .param(p("pressed", ValueKind::Bool)),
+                    .param(p("pressed", ValueKind::Bool))
+                    .ordered(),
             ),
             (
                 mouse,
@@ -338,7 +339,8 @@ impl Shared {
                 "button",
                 MethodSpec::new("button")
                     .param(p("name", ValueKind::String))
-                    .param(p("pressed", ValueKind::Bool)),
+                    .param(p("pressed", ValueKind::Bool))
+                    .ordered(),
             ),
             (
                 mouse,
@@ -346,7 +348,8 @@ impl Shared {
                 "wheel",
                 MethodSpec::new("wheel")
                     .param(p("axis", ValueKind::String))
-                    .param(p("delta", ValueKind::Float)),
+                    .param(p("delta", ValueKind::Float))
+                    .ordered(),
             ),
         ];
         for (obj, device, method, spec) in methods {

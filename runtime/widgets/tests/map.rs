@@ -1,7 +1,8 @@
 //! The map at its design size (640×480), drawn by the CPU path: the simulator's harbour
 //! (the shipped GeoJSON, through the `map` module), the simulator's vehicles by type with
 //! their trails, routes and marks, the view that follows a vehicle at a zoom, and a raster
-//! background from an MBTiles file this test draws itself.
+//! background from an MBTiles file this test draws itself, and a route edited on the map
+//! (a waypoint dragged and one inserted; a waypoint's context menu).
 //!
 //! `UPDATE_GOLDEN=1 cargo test -p mocu-widgets --test map` rewrites tests/golden/map_*.png.
 
@@ -338,11 +339,15 @@ fn a_route_is_edited_on_the_map_by_inserting_dragging_and_deleting_waypoints() {
     let want = ((moved[0].0 + moved[1].0) / 2.0, (moved[0].1 + moved[1].1) / 2.0);
     let near = (inserted[1].0 - want.0).abs() < 2.0 && (inserted[1].1 - want.1).abs() < 2.0;
     assert!(near, "{inserted:?} want {want:?}");
+    // What the operator sees: usv2's patrol with waypoint 2 moved east and a new waypoint
+    // on the first leg, in the route's colour.
+    check_golden("map_route_edited", &rig.frame());
     // A right press on it opens its menu; "Delete waypoint 2" removes it.
     let at = rig.drawn(path);
     rig.pointer("down", 1, at[1]);
     let menu = rig.ds.resolve(&["display", "context_menu", "menu"]).expect("a context menu");
     assert_eq!(rig.ds.try_get(menu, "item0".into()), Some(Value::str("Delete waypoint 2")));
+    check_golden("map_waypoint_menu", &rig.frame());
     mocu_widgets::menu::choose(&rig.ds, menu, 0);
     rig.frame();
     assert_eq!(rig.route(route), moved);
