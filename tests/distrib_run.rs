@@ -3,6 +3,8 @@
 //! eclipse-zenoh alone, and an adapter killed and restarted. Each test picks free ports;
 //! every wait is on something a process prints, bounded so that a hang fails.
 
+mod cli_support;
+use cli_support::sky_share;
 use serde_json::Value as J;
 use std::io::{BufRead, BufReader};
 use std::net::TcpListener;
@@ -381,4 +383,50 @@ fn a_python_process_module_stops_a_vehicle_leaving_its_zone_and_is_restarted_aft
     assert_eq!(status["properties"]["state"], "running", "{status}");
     let nav = child(child(child(&root, "vehicles"), "usv1"), "nav");
     assert_eq!(nav["properties"]["goal_throttle"], 0.0, "usv1 stopped: {nav}");
+}
+
+#[test]
+fn an_ocu_shows_the_camera_an_adapter_shares_in_its_video_window() {
+    let port = free_port();
+    let ep = endpoint(port);
+    let adapter = Proc::start(&[
+        "serve",
+        "tests/distrib/streams.toml",
+        "--listen",
+        &ep,
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+    ]);
+    adapter.wait_line(0, "usv1", |l| l.contains("vehicles: ") && l.contains("usv1"));
+    let dir = tempfile::tempdir().unwrap();
+    let shot = dir.path().join("ocu.png");
+    // layouts/usv.mocu shows usv1's drive camera full screen: the adapter's simulator renders
+    // it (someone listens: the share), the OCU has no simulator of its own.
+    let ocu = Proc::start(&[
+        "run",
+        "layouts/usv.mocu",
+        "--no-sim",
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+        "--headless",
+        "--no-watch",
+        "--connect",
+        &ep,
+        "--frames",
+        "180",
+        "--size",
+        "640x400",
+        "--screenshot",
+        shot.to_str().unwrap(),
+    ]);
+    let (out, lines) = ocu.finish();
+    assert!(out.status.success(), "the OCU failed:\n{}", lines.join("\n"));
+    // The upper right of the screen, clear of the HUD (as in tests/replay.rs).
+    let sky = sky_share(&shot, (490, 630), (60, 200));
+    assert!(sky > 0.9, "the camera's sky in the video window: {sky:.2} of the pixels");
+    drop(adapter);
 }

@@ -5,6 +5,8 @@
 //! After a deliberate change to what the display draws, refresh the golden with
 //! `mocu replay tests/data/trial.mcap --at 2.5s --screenshot tests/data/trial-2.5s.png`.
 
+mod cli_support;
+use cli_support::sky_share;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -108,21 +110,6 @@ fn a_file_that_is_not_a_recording_is_a_usage_error() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
-}
-
-/// The share of pixels of `png` in `x0..x1` × `y0..y1` that are sky blue (the simulator's
-/// camera sky: bright, blue well above red; the map's sea is dark).
-fn sky_share(png: &Path, (x0, x1): (u32, u32), (y0, y1): (u32, u32)) -> f64 {
-    let p = tiny_skia::Pixmap::load_png(png).expect("a PNG");
-    let mut sky = 0;
-    for y in y0..y1 {
-        for x in x0..x1 {
-            let c = p.pixel(x, y).expect("inside").demultiply();
-            let blue = u16::from(c.blue());
-            sky += usize::from(blue > 140 && blue > u16::from(c.red()) + 40);
-        }
-    }
-    sky as f64 / f64::from((x1 - x0) * (y1 - y0))
 }
 
 #[test]

@@ -21,3 +21,18 @@ pub fn scratch_dir(suite: &str, name: &str) -> PathBuf {
     std::fs::create_dir_all(&dir).expect("temp dir");
     dir
 }
+
+/// The share of pixels of `png` in `x0..x1` × `y0..y1` that are sky blue (the simulator's
+/// camera sky: bright, blue well above red; the map's sea is dark).
+pub fn sky_share(png: &std::path::Path, (x0, x1): (u32, u32), (y0, y1): (u32, u32)) -> f64 {
+    let p = tiny_skia::Pixmap::load_png(png).expect("a PNG");
+    let mut sky = 0;
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let c = p.pixel(x, y).expect("inside").demultiply();
+            let blue = u16::from(c.blue());
+            sky += usize::from(blue > 140 && blue > u16::from(c.red()) + 40);
+        }
+    }
+    sky as f64 / f64::from((x1 - x0) * (y1 - y0))
+}

@@ -208,6 +208,18 @@ pub const MODULES: &[ModuleKind] = &[
                 "none",
                 "Object paths whose subtrees are published, e.g. [\"vehicles\"]",
             ),
+            s(
+                "streams",
+                Names,
+                "none",
+                "Listeners of the shared subtrees whose messages are shared, * for any one name, e.g. [\"vehicles.*.cameras.drive\"]",
+            ),
+            s(
+                "stream_rate_hz",
+                Number,
+                "5",
+                "The most messages a second shared per stream (a camera's frame rate over the network)",
+            ),
             s("operator", String, "none", "The operator's name, sent with every call"),
             s(
                 "site",

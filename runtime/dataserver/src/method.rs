@@ -92,6 +92,9 @@ pub struct MethodSpec {
     /// event streams such as pointer and key input, where a press overtaken by its release
     /// would be a different gesture.
     pub ordered: bool,
+    /// The method takes any arguments, unchecked (`params` only describes them): a stream
+    /// tap that forwards whatever its listener sends, whatever the sender's message is.
+    pub any_args: bool,
 }
 
 impl MethodSpec {
@@ -103,6 +106,7 @@ impl MethodSpec {
             defaults: CallOptions::default(),
             description: None,
             ordered: false,
+            any_args: false,
         }
     }
 
@@ -124,6 +128,12 @@ impl MethodSpec {
     /// Calls to this method run in the order they were made (see [`MethodSpec::ordered`]).
     pub fn ordered(mut self) -> MethodSpec {
         self.ordered = true;
+        self
+    }
+
+    /// Calls to this method pass any arguments through unchecked (see [`MethodSpec::any_args`]).
+    pub fn any_args(mut self) -> MethodSpec {
+        self.any_args = true;
         self
     }
 
@@ -274,6 +284,9 @@ impl DataServer {
 }
 
 pub(crate) fn check_args(spec: &MethodSpec, args: Vec<Value>) -> Result<Arc<[Value]>, String> {
+    if spec.any_args {
+        return Ok(args.into());
+    }
     if args.len() != spec.params.len() {
         let names: Vec<&str> = spec.params.iter().map(|p| &*p.name).collect();
         return Err(format!(

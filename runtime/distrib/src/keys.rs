@@ -4,6 +4,7 @@
 //! mocu/<site>/obj/<path>            an object's record (put), its deletion (delete)
 //! mocu/<site>/prop/<path>/<name>    a property's value (put), its deletion (delete)
 //! mocu/<site>/call/<path>/<method>  a method, called with a query
+//! mocu/<site>/stream/<path>         a shared stream's messages (a camera's frames)
 //! mocu/<site>/alive                 the site's liveliness token
 //! ```
 //!
@@ -17,6 +18,7 @@ pub enum Key {
     Object { site: String, path: Vec<String> },
     Property { site: String, path: Vec<String>, name: String },
     Call { site: String, path: Vec<String>, method: String },
+    Stream { site: String, path: Vec<String> },
     Alive { site: String },
 }
 
@@ -84,6 +86,10 @@ pub fn call(site: &str, path: &[String], method: &str) -> String {
     join(site, "call", path, Some(method))
 }
 
+pub fn stream(site: &str, path: &[String]) -> String {
+    join(site, "stream", path, None)
+}
+
 pub fn alive(site: &str) -> String {
     format!("mocu/{}/alive", chunk(site))
 }
@@ -105,6 +111,7 @@ pub fn parse(key: &str) -> Option<Key> {
     Some(match what {
         "alive" if rest.is_empty() => Key::Alive { site },
         "obj" => Key::Object { site, path: rest },
+        "stream" if !rest.is_empty() => Key::Stream { site, path: rest },
         "prop" => {
             let name = rest.pop()?;
             Key::Property { site, path: rest, name }
@@ -142,6 +149,7 @@ mod tests {
                 call("s", &path, "arm"),
                 Key::Call { site: "s".into(), path: path.clone(), method: "arm".into() },
             ),
+            (stream("s", &path), Key::Stream { site: "s".into(), path: path.clone() }),
             (alive("s"), Key::Alive { site: "s".into() }),
         ] {
             assert_eq!(parse(&k), Some(want), "{k}");
@@ -150,9 +158,14 @@ mod tests {
 
     #[test]
     fn keys_outside_the_key_space_are_not_read() {
-        for k in
-            ["other/x/obj/a", "mocu/s/what/a", "mocu/s/prop", "mocu/s/obj/a%zz", "mocu/s/obj/a*"]
-        {
+        for k in [
+            "other/x/obj/a",
+            "mocu/s/what/a",
+            "mocu/s/prop",
+            "mocu/s/obj/a%zz",
+            "mocu/s/obj/a*",
+            "mocu/s/stream",
+        ] {
             assert_eq!(parse(k), None, "{k}");
         }
     }

@@ -24,6 +24,7 @@ mod module;
 pub mod payload;
 mod publish;
 pub mod security;
+pub mod streams;
 mod writes;
 
 pub use mirror::MirrorStats;
@@ -63,6 +64,8 @@ pub struct Config {
     pub control: Option<arbiter::Settings>,
     /// Mutual TLS and access control (`security.rs`); the default: plain TCP, open.
     pub security: security::Security,
+    /// Streams of the shared subtrees put on the key space (`streams.rs`); default: none.
+    pub streams: streams::StreamChoice,
 }
 
 impl Default for Config {
@@ -77,6 +80,7 @@ impl Default for Config {
             lease: Duration::from_millis(2000),
             control: None,
             security: security::Security::default(),
+            streams: streams::StreamChoice::default(),
         }
     }
 }
@@ -219,12 +223,21 @@ impl Distrib {
                 .wait()
                 .map_err(zerr)?;
         }
+        let taps = streams::Taps::new(
+            ds.clone(),
+            session.clone(),
+            site.clone(),
+            config.streams.clone(),
+            status,
+            publish_stats.clone(),
+        );
         let p = publish::Publisher::new(
             ds.clone(),
             session.clone(),
             site.clone(),
             share,
             publish_stats.clone(),
+            taps,
         );
         let st = stop.clone();
         threads.push(spawn("publish", Box::new(move || p.run(feed, q_rx, st)))?);
@@ -244,7 +257,7 @@ impl Distrib {
         );
         m.notify = notify;
         threads.push(spawn("mirror", Box::new(move || m.run(in_rx)))?);
-        for what in ["obj", "prop"] {
+        for what in ["obj", "prop", "stream"] {
             let tx = in_tx.clone();
             session
                 .declare_subscriber(keys::state_of(None, what))

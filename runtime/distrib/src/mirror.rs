@@ -12,7 +12,9 @@ use crate::calls::CallJob;
 use crate::keys::{self, Key};
 use crate::payload;
 use crossbeam_channel::{Receiver, Sender};
-use mocu_dataserver::{Call, DataServer, Guid, ObjectInfo, PropMeta, PropName, Value};
+use mocu_dataserver::{
+    Call, DataServer, Guid, LISTENER_TYPE, ObjectInfo, PropMeta, PropName, Value,
+};
 use parking_lot::{Condvar, Mutex};
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -157,7 +159,16 @@ impl Mirror {
                     c.insert(path);
                 }
             }
-            Key::Object { .. } | Key::Property { .. } => {}
+            Key::Stream { site, path } if site != self.me && put => {
+                // Sent again on the mirrored listener; before the listener is mirrored (a
+                // frame overtaking the snapshot) there is nobody to show it to.
+                let args = payload::stream_from(bytes)?;
+                let local = self.sites.get(&site).and_then(|s| s.objects.get(&path));
+                if let Some(m) = local {
+                    let _ = self.ds.send(m.local, args);
+                }
+            }
+            Key::Object { .. } | Key::Property { .. } | Key::Stream { .. } => {}
             Key::Call { .. } | Key::Alive { .. } => return Err(bad()),
         }
         Ok(())
@@ -201,7 +212,16 @@ impl Mirror {
             Some(g) => (g, false),
             None => {
                 let info = rec.map_or_else(|| ObjectInfo::new(name, "object"), |r| r.info.clone());
-                (self.ds.create_object(parent, info).ok()?, true)
+                // A listener is mirrored as a listener: local video windows join it, and a
+                // shared stream's messages are sent on it.
+                let local = if &*info.kind == LISTENER_TYPE {
+                    let l = self.ds.create_listener(parent, name).ok()?;
+                    let _ = self.ds.set_info(l, info);
+                    l
+                } else {
+                    self.ds.create_object(parent, info).ok()?
+                };
+                (local, true)
             }
         };
         if owned {

@@ -58,8 +58,18 @@ pub fn config_from(spec: &ModuleSpec) -> Result<(Config, Duration), String> {
         call_timeout: millis(spec, "call_timeout_ms", 10_000)?,
         lease: millis(spec, "lease_ms", 2_000)?,
         security: crate::security::from_spec(spec)?,
+        streams: streams_from(spec)?,
     };
     Ok((config, millis(spec, "join_timeout_ms", 10_000)?))
+}
+
+/// `streams` (listener paths, `*` for any one name) and `stream_rate_hz`.
+fn streams_from(spec: &ModuleSpec) -> Result<crate::streams::StreamChoice, String> {
+    let rate = spec.f64_or("stream_rate_hz", 5.0).map_err(|e| e.to_string())?;
+    if !(rate > 0.0 && rate <= 120.0) {
+        return Err("`stream_rate_hz` must be more than 0 and at most 120".into());
+    }
+    Ok(crate::streams::StreamChoice::new(&names(spec, "streams")?, rate))
 }
 
 struct DistribModule {

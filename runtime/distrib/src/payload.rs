@@ -233,6 +233,65 @@ pub fn property_from(bytes: &[u8]) -> Result<(Value, Option<PropMeta>), Malforme
     Ok((v, m))
 }
 
+/// A stream message (a camera frame): a JSON line, then the bytes of its `bytes` arguments
+/// back to back. The line is `{"args": [typed…]}` where a top-level `bytes` argument is
+/// `{"kind":"bytes","len":N}` instead of hex, its N bytes following the newline in argument
+/// order (a 640×480 frame is not made 2.5 MB of hex text). Compact JSON holds no raw
+/// newline, so a reader splits at the first one (Python: `bytes.partition(b"\n")`).
+pub fn stream(args: &[Value]) -> Vec<u8> {
+    let blobs: usize = args.iter().map(|a| if let Value::Bytes(b) = a { b.len() } else { 0 }).sum();
+    let head: Vec<J> = args
+        .iter()
+        .map(|a| match a {
+            Value::Bytes(b) => json!({"kind": "bytes", "len": b.len()}),
+            other => value(other),
+        })
+        .collect();
+    let mut out = json!({ "args": head }).to_string().into_bytes();
+    out.reserve_exact(1 + blobs);
+    out.push(b'\n');
+    for a in args {
+        if let Value::Bytes(b) = a {
+            out.extend_from_slice(b);
+        }
+    }
+    out
+}
+
+pub fn stream_from(bytes: &[u8]) -> Result<Vec<Value>, Malformed> {
+    let nl = bytes
+        .iter()
+        .position(|&b| b == b'\n')
+        .ok_or_else(|| bad("a stream message without its newline"))?;
+    let j = parse(&bytes[..nl])?;
+    let args = j
+        .get("args")
+        .and_then(J::as_array)
+        .ok_or_else(|| bad("a stream message without `args`"))?;
+    let mut tail = &bytes[nl + 1..];
+    let mut out = Vec::with_capacity(args.len());
+    for a in args {
+        let blob = a.get("kind").and_then(J::as_str) == Some("bytes") && a.get("value").is_none();
+        if !blob {
+            out.push(value_from(a)?);
+            continue;
+        }
+        let n = a
+            .get("len")
+            .and_then(J::as_u64)
+            .ok_or_else(|| bad("a bytes argument without `len`"))?;
+        let n = usize::try_from(n).ok().filter(|n| *n <= tail.len());
+        let n = n.ok_or_else(|| bad("a stream message shorter than its `len`s"))?;
+        let (b, rest) = tail.split_at(n);
+        out.push(Value::Bytes(b.into()));
+        tail = rest;
+    }
+    if !tail.is_empty() {
+        return Err(bad("a stream message longer than its `len`s"));
+    }
+    Ok(out)
+}
+
 /// A call's query payload: `{"args": [typed…], "timeout_ms": N, "operator": NAME,
 /// "site": SITE}` (operator and site: the calling process's, for control arbitration).
 pub fn call(args: &[Value], timeout_ms: u64, operator: &str, site: &str) -> Vec<u8> {
@@ -342,6 +401,29 @@ mod tests {
             methods: vec![MethodSpec::new("arm").param(ParamSpec::new("on", ValueKind::Bool))],
         };
         assert_eq!(object_from(&object(&r)), Ok(r));
+    }
+
+    #[test]
+    fn a_stream_message_reads_back_equal_its_bytes_raw_after_the_line() {
+        let frame: Vec<u8> = (0..=255u8).cycle().take(640 * 3).collect();
+        let args = vec![
+            Value::Bytes(frame.clone().into()),
+            Value::Int(640),
+            Value::str("rgb8\nnot a line break"),
+            Value::Bytes(vec![b'\n', 0].into()),
+        ];
+        let bytes = stream(&args);
+        assert_eq!(stream_from(&bytes), Ok(args));
+        // The frame travels as itself, not as hex.
+        assert!(bytes.len() < frame.len() + 200, "{} bytes", bytes.len());
+        for bad in [
+            &b"{\"args\":[]}"[..],
+            b"{\"args\":[{\"kind\":\"bytes\",\"len\":9}]}\nabc",
+            b"{\"args\":[]}\nx",
+            b"\xff\n",
+        ] {
+            assert!(stream_from(bad).is_err(), "{}", String::from_utf8_lossy(bad));
+        }
     }
 
     #[test]

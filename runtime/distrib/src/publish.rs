@@ -9,9 +9,11 @@
 
 use crate::keys;
 use crate::payload::{self, ObjectRecord};
+use crate::streams::{TAP_TYPE, Taps};
 use crossbeam_channel::Receiver;
 use mocu_dataserver::{
-    Change, ChangeFeed, DataServer, Guid, MethodSpec, ObjectInfo, PropMeta, PropName, Value,
+    Change, ChangeFeed, DataServer, Guid, LISTENER_TYPE, MethodSpec, ObjectInfo, PropMeta,
+    PropName, RECEIVER_TYPE, Value,
 };
 use std::collections::{HashMap, HashSet};
 use std::sync::Arc;
@@ -36,6 +38,9 @@ pub struct PubStats {
     pub puts: AtomicU64,
     pub skipped_equal: AtomicU64,
     pub snapshots: AtomicU64,
+    /// Stream messages put on the key space, and those the pace left out.
+    pub stream_puts: AtomicU64,
+    pub stream_paced: AtomicU64,
 }
 
 pub(crate) struct Publisher {
@@ -45,6 +50,7 @@ pub(crate) struct Publisher {
     /// Shared subtrees, as object paths from the root.
     pub share: Vec<Vec<String>>,
     pub stats: Arc<PubStats>,
+    taps: Taps,
     nodes: HashMap<Guid, Node>,
     touched: HashSet<Guid>,
 }
@@ -56,6 +62,7 @@ impl Publisher {
         site: String,
         share: Vec<Vec<String>>,
         stats: Arc<PubStats>,
+        taps: Taps,
     ) -> Publisher {
         Publisher {
             ds,
@@ -63,6 +70,7 @@ impl Publisher {
             site,
             share,
             stats,
+            taps,
             nodes: HashMap::new(),
             touched: HashSet::new(),
         }
@@ -120,13 +128,17 @@ impl Publisher {
         let mut path = p.path.clone();
         path.push(info.name.to_string());
         let (shared, relevant) = self.relevance(&path);
-        if !relevant {
+        // A stream's receivers and this site's taps are local plumbing, never shared.
+        let plumbing = matches!(&*info.kind, RECEIVER_TYPE | TAP_TYPE);
+        if !relevant || plumbing {
             return;
         }
         if let Some(p) = self.nodes.get_mut(&parent) {
             p.children.push(guid);
         }
         let methods = if shared { self.ds.methods(guid).unwrap_or_default() } else { Vec::new() };
+        let listener = shared && &*info.kind == LISTENER_TYPE && self.taps.wanted(&path);
+        let tap = listener.then(|| path.clone());
         self.nodes.insert(
             guid,
             Node { path, info, shared, children: Vec::new(), props: Vec::new(), methods },
@@ -138,12 +150,16 @@ impl Publisher {
                 self.set_prop(guid, name, value, meta.map(Arc::new), true);
             }
         }
+        if let Some(path) = tap {
+            self.taps.tap(guid, &path);
+        }
         self.adopt_children(guid);
     }
 
     /// Forgets a subtree (its mirror is deleted with the object's key).
     fn retire(&mut self, guid: Guid, announce: bool) {
         let Some(n) = self.nodes.remove(&guid) else { return };
+        self.taps.untap(guid);
         if announce && n.shared {
             let key = keys::object(&self.site, &n.path);
             let _ = self.session.delete(key).wait();

@@ -1,6 +1,7 @@
 //! What the in-process tests of sites on loopback share: free ports and waits on a path's
 //! values, bounded so that a failure fails instead of hanging.
 
+#![allow(dead_code)] // each test binary uses the part of it that it needs
 use crossbeam_channel::{Receiver, unbounded};
 use mocu_dataserver::{DataServer, DottedPath, Kind, PathEvent, PathWatch, Value};
 use std::net::TcpListener;
