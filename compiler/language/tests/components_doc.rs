@@ -83,3 +83,36 @@ fn an_indented_doc_line_goes_on_with_the_parameter_above_it() {
     );
     assert!(!page.contains("\n  given"), "{page}");
 }
+
+/// Every standard component used without its `use` gets the help naming its file, whichever
+/// file of stdlib/ it is in (a file left out of the hints' list once gave `ControlHolder`
+/// "e.g. stdlib/gauges.mocu").
+#[test]
+fn a_standard_component_used_without_its_file_is_told_which_file_to_use() {
+    use mocu_language::{Diagnostics, FsLoader, SourceMap};
+    let mut checked = 0;
+    for (file, text) in stdlib() {
+        for line in text.lines() {
+            let Some(rest) = line.strip_prefix("component ") else { continue };
+            let name: String =
+                rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+            let layout = format!(
+                "window w {{ rect 0 0 100 100 }}\nin w {{\n    x: {name} {{ at 0 0 10 10 }}\n}}\n"
+            );
+            let (mut sources, mut diags) = (SourceMap::default(), Diagnostics::default());
+            let _ = mocu_language::check_layout(
+                "t.mocu",
+                layout,
+                &FsLoader,
+                None,
+                &mut sources,
+                &mut diags,
+            );
+            let want = format!("`{name}` is in {file}: add `use \"{file}\"`");
+            let helps: Vec<String> = diags.iter().filter_map(|d| d.help.clone()).collect();
+            assert!(helps.iter().any(|h| h.contains(&want)), "{name}: {helps:?}");
+            checked += 1;
+        }
+    }
+    assert!(checked >= 15, "only {checked} components found");
+}

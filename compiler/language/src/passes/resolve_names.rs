@@ -501,7 +501,10 @@ impl<'a> Resolver<'a, '_> {
 const STDLIB: &[(&str, &str)] = &[
     ("stdlib/alerts.mocu", include_str!("../../../../stdlib/alerts.mocu")),
     ("stdlib/controls.mocu", include_str!("../../../../stdlib/controls.mocu")),
+    ("stdlib/frames.mocu", include_str!("../../../../stdlib/frames.mocu")),
     ("stdlib/gauges.mocu", include_str!("../../../../stdlib/gauges.mocu")),
+    ("stdlib/manipulator.mocu", include_str!("../../../../stdlib/manipulator.mocu")),
+    ("stdlib/status.mocu", include_str!("../../../../stdlib/status.mocu")),
     ("stdlib/theme.mocu", include_str!("../../../../stdlib/theme.mocu")),
 ];
 
