@@ -6,7 +6,7 @@
 
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use mavlink::MavHeader;
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mocu_dataserver::DataServer;
 use mocu_host::ModuleContext;
 use mocu_mavlink::{Link, LinkConfig, decode_datagram, encode_v2};

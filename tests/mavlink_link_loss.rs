@@ -3,7 +3,7 @@
 //! (tests/mavlink_peer.rs checks the same against a real pymavlink peer, in real time.)
 
 use mavlink::MavHeader;
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mocu_dataserver::{Config, DataServer, ManualClock, Value};
 use mocu_host::ModuleContext;
 use mocu_mavlink::{Link, LinkConfig, encode_v2};

@@ -16,7 +16,7 @@ struct Peer {
 }
 
 impl Peer {
-    fn start(port: u16, sysid: u8) -> Peer {
+    fn start(port: u16, sysid: u8, extra: &[&str]) -> Peer {
         let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/peers/mav_vehicle.py");
         let check = Command::new("python3").args(["-c", "import pymavlink"]).output();
         match check {
@@ -29,6 +29,7 @@ impl Peer {
         let mut child = Command::new("python3")
             .arg(script)
             .args(["--port", &port.to_string(), "--sysid", &sysid.to_string()])
+            .args(extra)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
@@ -115,6 +116,11 @@ fn call(ds: &DataServer, g: Guid, m: &str, args: Vec<Value>) -> CallOutcome {
 /// The MAVLink module on a loopback port, and a pymavlink vehicle of system id `sysid` sending
 /// to it.
 fn connect(sysid: u8) -> (DataServer, ModuleHost, Peer) {
+    connect_with(sysid, &[])
+}
+
+/// [`connect`], the peer started with `extra` arguments.
+fn connect_with(sysid: u8, extra: &[&str]) -> (DataServer, ModuleHost, Peer) {
     let ds = DataServer::default();
     let mut reg = Registry::new();
     mocu_mavlink::register(&mut reg);
@@ -127,7 +133,7 @@ fn connect(sysid: u8) -> (DataServer, ModuleHost, Peer) {
     let status = ds.resolve(&["modules", "mavlink"]).unwrap();
     let addr = ds.get(status, "address").unwrap();
     let port: u16 = addr.as_str().unwrap().rsplit(':').next().unwrap().parse().unwrap();
-    let peer = Peer::start(port, sysid);
+    let peer = Peer::start(port, sysid, extra);
     (ds, host, peer)
 }
 
@@ -338,5 +344,61 @@ fn an_uploaded_route_edited_in_the_world_model_sends_only_the_changed_waypoints(
     assert_eq!(peer.said_n("partial_item ", 0).len(), 3);
     assert_eq!(peer.said_n("partial_refused ", 0).len(), 1);
     peer.tell("quit");
+    host.stop_all();
+}
+
+/// MAVLink's GCS operator-control protocol (development dialect) through the adapter's
+/// arbiter: a vehicle held by another ground station (GCS 200, takeover not allowed) shows
+/// that holder and refuses our request with the reason; once GCS 200 lets go, an operator's
+/// request asks the vehicle (MAV_CMD_REQUEST_OPERATOR_CONTROL), which grants this adapter's
+/// system id; releasing the last holder gives the vehicle's control back.
+#[test]
+fn a_vehicle_speaking_the_operator_control_protocol_is_arbitrated_through_it() {
+    use mocu_distrib::arbiter::{Arbiter, Settings};
+    use mocu_distrib::control::Caller;
+    let (ds, mut host, mut peer) = connect_with(9, &["--gcs-control", "200"]);
+    let arbiter =
+        Arbiter::start(&ds, Settings::default(), Caller::new("alice", "adapter")).unwrap();
+    let vehicles = ds.resolve(&["vehicles"]).unwrap();
+    let v = wait_for(&ds, &[Topic::Children { object: vehicles }], "the vehicle", || {
+        ds.children(vehicles).ok()?.first().copied()
+    });
+    let s = |g: Guid, p: &str| ds.try_get(g, p.into()).and_then(|v| v.as_str().map(String::from));
+    wait_for(&ds, &[Topic::properties(v)], "CONTROL_STATUS heard, the address proved", || {
+        let proved = ds.try_get(v, "verified".into()) == Some(Value::Bool(true));
+        (s(v, "control")? == "gcs 200" && proved).then_some(())
+    });
+    let arb = wait_for(&ds, &[Topic::Children { object: v }], "the arbitration object", || {
+        ds.find_child(v, "arbitration").ok().flatten()
+    });
+    wait_for(&ds, &[Topic::properties(arb)], "gcs 200 shown as the holder", || {
+        (s(arb, "holder")? == "gcs 200").then_some(())
+    });
+
+    // Held elsewhere, takeover not allowed: the vehicle refuses, and says who holds it.
+    let out = call(&ds, arb, "request", vec![]);
+    let CallOutcome::Refused(why) = &out else { panic!("{out:?}") };
+    assert!(why.contains("gcs 200"), "{why}");
+    assert_eq!(arbiter.holder(&ds.info(v).unwrap().name), Some(String::new()));
+
+    // GCS 200 lets go; alice's request is the vehicle's to grant, to this adapter (255).
+    peer.tell("gcs_release");
+    wait_for(&ds, &[Topic::properties(v)], "the vehicle free", || {
+        (s(v, "control")?.is_empty()).then_some(())
+    });
+    assert_eq!(call(&ds, arb, "request", vec![]), CallOutcome::Accepted(vec![]));
+    assert!(peer.said_n("control 255", 1).len() == 1, "the vehicle granted 255");
+    wait_for(&ds, &[Topic::properties(v)], "alice in control", || {
+        (s(v, "control")? == "alice").then_some(())
+    });
+    assert_eq!(s(arb, "holder").as_deref(), Some("alice"));
+
+    // The last holder releases: the vehicle's control is given back.
+    assert_eq!(call(&ds, arb, "release", vec![]), CallOutcome::Accepted(vec![]));
+    assert_eq!(peer.said_n("control 0", 2).len(), 2, "released by gcs 200, then by us");
+    wait_for(&ds, &[Topic::properties(v)], "the vehicle free again", || {
+        (s(v, "control")?.is_empty()).then_some(())
+    });
+    arbiter.stop();
     host.stop_all();
 }

@@ -16,6 +16,12 @@ Behaviour the tests rely on:
     MAV_MISSION_UNSUPPORTED (an autopilot without partial writes).
   * stdin line "silence S": send nothing for S seconds (link loss), then resume.
   * stdin line "quit" (or EOF): exit.
+  * --gcs-control N: the vehicle speaks MAVLink's GCS operator-control protocol (development
+    dialect): CONTROL_STATUS (message 512, system manager) at 1 Hz and at each change, GCS N
+    in control at start (0: none), takeover not allowed; MAV_CMD_REQUEST_OPERATOR_CONTROL
+    (32100) grants a request when nobody holds it (ACCEPTED, else FAILED) and a release by
+    the holder. stdin line "gcs_release": the holding GCS lets go.
+    Prints "control N" at each change of the GCS in control.
 Prints "ready", "mission N", "mission_item SEQ LAT LON ALT", "partial START END",
 "partial_item SEQ LAT LON ALT", "partial_refused START END" lines on stdout.
 """
@@ -33,13 +39,52 @@ m = mavutil.mavlink
 ap = argparse.ArgumentParser()
 ap.add_argument("--port", type=int, required=True)
 ap.add_argument("--sysid", type=int, default=1)
+ap.add_argument("--gcs-control", type=int, default=None)
 args = ap.parse_args()
 
 conn = mavutil.mavlink_connection(
     f"udpout:127.0.0.1:{args.port}", source_system=args.sysid, source_component=1, dialect="common"
 )
 
-state = {"armed": False, "mode": 0, "silent_until": 0.0, "quit": False, "refuse_partial": False}
+state = {"armed": False, "mode": 0, "silent_until": 0.0, "quit": False, "refuse_partial": False,
+         "gcs": args.gcs_control}
+
+# MAVLink's operator-control protocol is in the development dialect, which pymavlink 2.4.50
+# lacks: CONTROL_STATUS is framed here as the spec defines it (MAVLink 2, CRC_EXTRA from its
+# fields, uint8 flags, uint8 gcs_main, uint8[10] gcs_secondary).
+MAV_CMD_REQUEST_OPERATOR_CONTROL = 32100
+CONTROL_STATUS_ID = 512
+FLAG_SYSTEM_MANAGER = 1
+
+
+def crc_extra(name, fields):
+    from pymavlink.generator.mavcrc import x25crc
+    crc = x25crc()
+    crc.accumulate_str(name + " ")
+    for ftype, fname, length in fields:
+        crc.accumulate_str(ftype + " ")
+        crc.accumulate_str(fname + " ")
+        if length:
+            crc.accumulate([length])
+    return (crc.crc & 0xFF) ^ (crc.crc >> 8)
+
+
+CONTROL_STATUS_EXTRA = crc_extra(
+    "CONTROL_STATUS", [("uint8_t", "flags", 0), ("uint8_t", "gcs_main", 0), ("uint8_t", "gcs_secondary", 10)]
+)
+control_seq = [0]
+
+
+def send_control_status():
+    from pymavlink.generator.mavcrc import x25crc
+    payload = bytes([FLAG_SYSTEM_MANAGER, state["gcs"]] + [0] * 10).rstrip(b"\0") or b"\0"
+    header = bytes([len(payload), 0, 0, control_seq[0] & 0xFF, args.sysid, 1,
+                    CONTROL_STATUS_ID & 0xFF, (CONTROL_STATUS_ID >> 8) & 0xFF, 0])
+    control_seq[0] += 1
+    crc = x25crc(header + payload)
+    crc.accumulate([CONTROL_STATUS_EXTRA])
+    conn.write(bytes([0xFD]) + header + payload + bytes([crc.crc & 0xFF, crc.crc >> 8]))
+
 lock = threading.Lock()
 
 
@@ -59,6 +104,11 @@ def stdin_commands():
         elif words[0] == "refuse_partial":
             state["refuse_partial"] = True
             say("refusing partial writes")
+        elif words[0] == "gcs_release":
+            with lock:
+                state["gcs"] = 0
+            say("control", 0)
+            send_control_status()
         elif words[0] == "quit":
             break
     state["quit"] = True
@@ -91,6 +141,8 @@ while not state["quit"]:
             m.MAV_TYPE_QUADROTOR, m.MAV_AUTOPILOT_ARDUPILOTMEGA, base, state["mode"], m.MAV_STATE_ACTIVE
         )
         conn.mav.sys_status_send(0, 0, 0, 250, 12600, 1500, 87, 0, 0, 0, 0, 0, 0)
+        if state["gcs"] is not None:
+            send_control_status()
     if not silent and now >= next_fast:
         next_fast = now + 0.1
         ms = int((now - t0) * 1000)
@@ -119,10 +171,23 @@ while not state["quit"]:
             result = m.MAV_RESULT_ACCEPTED
         elif cmd == m.MAV_CMD_NAV_LAND:
             result = m.MAV_RESULT_DENIED
+        elif cmd == MAV_CMD_REQUEST_OPERATOR_CONTROL and state["gcs"] is not None:
+            gcs = int(msg.param4) or msg.get_srcSystem()
+            with lock:
+                if msg.param1 >= 0.5 and state["gcs"] in (0, gcs):
+                    state["gcs"], result = gcs, m.MAV_RESULT_ACCEPTED
+                elif msg.param1 < 0.5 and state["gcs"] == gcs:
+                    state["gcs"], result = 0, m.MAV_RESULT_ACCEPTED
+                else:
+                    result = m.MAV_RESULT_FAILED
+            if result == m.MAV_RESULT_ACCEPTED:
+                say("control", state["gcs"])
         else:
             result = m.MAV_RESULT_UNSUPPORTED
         say("command", cmd, result)
         conn.mav.command_ack_send(cmd, result)
+        if cmd == MAV_CMD_REQUEST_OPERATOR_CONTROL and state["gcs"] is not None:
+            send_control_status()
     elif t == "MISSION_COUNT":
         partial = None
         mission = {"count": msg.count, "next": 0, "items": []}

@@ -68,6 +68,11 @@ pub(crate) type Reply = Box<dyn FnOnce(CallOutcome) + Send>;
 
 struct Vehicle {
     object: Guid,
+    /// The vehicle's own object (its `control`, `gcs_in_control`; its control methods).
+    vehicle: Guid,
+    /// Whether the vehicle granted this site control through MAVLink's operator-control
+    /// protocol (`gcs.rs`): given back when no operator here holds it any more.
+    granted: bool,
     control: Control,
     /// The pending takeover's caller, answered when the holder does (or the ask times out).
     asking: Option<Reply>,
@@ -211,13 +216,31 @@ impl Arbiter {
                 );
             });
         }
+        // Another ground station taking or leaving a vehicle that speaks MAVLink's
+        // operator-control protocol changes its `control`: the holder shown follows.
+        let (weak, vname) = (Arc::downgrade(&self.inner), name.to_string());
+        let sub = ds.subscribe(Topic::property_names(vehicle, &["control"]), move |_| {
+            if let Some(inner) = weak.upgrade() {
+                let me = Arbiter { inner };
+                let st = me.inner.state.lock();
+                if let Some(v) = st.vehicles.get(&vname) {
+                    me.publish(v);
+                }
+            }
+        });
         let mut st = self.inner.state.lock();
+        if let Ok(id) = sub {
+            st.subs.push(id);
+        }
         let v = st.vehicles.entry(name.to_string()).or_insert(Vehicle {
             object,
+            vehicle,
+            granted: false,
             control,
             asking: None,
         });
         v.object = object;
+        v.vehicle = vehicle;
         self.publish(v);
     }
 
@@ -238,6 +261,9 @@ impl Arbiter {
                  {vehicle}.{OBJECT}.request(), release() or takeover()"
             ));
         }
+        if let Some(gcs) = crate::gcs::foreign_holder(&self.inner.ds, v.vehicle) {
+            return Screen::Refuse(crate::gcs::held_elsewhere(vehicle, &gcs));
+        }
         match v.control.command(caller, vehicle) {
             Ok(()) => Screen::Pass,
             Err(reason) => Screen::Refuse(reason),
@@ -248,6 +274,69 @@ impl Arbiter {
     /// outcome (later, for a takeover the holder is asked for). `limit`: the caller's own
     /// timeout, which an ask must end before.
     pub(crate) fn arbitrate(
+        &self,
+        vehicle: &str,
+        method: &str,
+        args: &[Value],
+        caller: Caller,
+        limit: Option<Duration>,
+        reply: Reply,
+    ) {
+        if let Some(ask) = self.ask_vehicle_first(vehicle, method, &caller) {
+            // The vehicle decides first (MAVLink's operator-control protocol); then the rules
+            // here choose among this site's operators as for any vehicle.
+            let (me, vehicle, method, args) =
+                (self.clone(), vehicle.to_string(), method.to_string(), args.to_vec());
+            let operator = caller.operator.clone();
+            return crate::gcs::request(
+                &self.inner.ds,
+                ask,
+                &operator,
+                move |outcome| match outcome {
+                    CallOutcome::Accepted(_) => {
+                        if let Some(v) = me.inner.state.lock().vehicles.get_mut(&vehicle) {
+                            v.granted = true;
+                        }
+                        me.arbitrate_here(&vehicle, &method, &args, caller, limit, reply);
+                        me.give_back_if_free(&vehicle);
+                    }
+                    other => reply(crate::gcs::refusal(&vehicle, other)),
+                },
+            );
+        }
+        self.arbitrate_here(vehicle, method, args, caller, limit, reply);
+        self.give_back_if_free(vehicle);
+    }
+
+    /// The vehicle to ask first for `method` by `caller`: a request or a takeover of a
+    /// vehicle that speaks MAVLink's operator-control protocol while no operator of this site
+    /// holds it (once one does, the vehicle's control is this site's already).
+    fn ask_vehicle_first(&self, vehicle: &str, method: &str, _caller: &Caller) -> Option<Guid> {
+        if !matches!(method, "request" | "takeover") {
+            return None;
+        }
+        let st = self.inner.state.lock();
+        let v = st.vehicles.get(vehicle)?;
+        let free = v.control.holder.is_none();
+        (free && crate::gcs::speaks_protocol(&self.inner.ds, v.vehicle)).then_some(v.vehicle)
+    }
+
+    /// Gives the vehicle's control back (MAVLink's operator-control protocol) once no
+    /// operator of this site holds it.
+    fn give_back_if_free(&self, vehicle: &str) {
+        let target = {
+            let mut st = self.inner.state.lock();
+            let Some(v) = st.vehicles.get_mut(vehicle) else { return };
+            if !v.granted || v.control.holder.is_some() {
+                return;
+            }
+            v.granted = false;
+            v.vehicle
+        };
+        crate::gcs::release(&self.inner.ds, target);
+    }
+
+    fn arbitrate_here(
         &self,
         vehicle: &str,
         method: &str,
@@ -390,6 +479,7 @@ impl Arbiter {
         if let Some(r) = pending {
             r(CallOutcome::Accepted(Vec::new()));
         }
+        self.give_back_if_free(vehicle);
     }
 
     /// The holder of `vehicle` (empty when none), for tools and tests.
@@ -403,7 +493,9 @@ impl Arbiter {
     fn publish(&self, v: &Vehicle) {
         let (ds, c) = (&self.inner.ds, &v.control);
         let asker = c.requested_by.as_ref().map_or("", |r| r.operator.as_str());
-        let _ = ds.set(v.object, "holder", Value::str(c.holder_name()));
+        let foreign = crate::gcs::foreign_holder(ds, v.vehicle);
+        let holder = foreign.as_deref().unwrap_or(c.holder_name());
+        let _ = ds.set(v.object, "holder", Value::str(holder));
         let _ = ds.set(v.object, "requested_by", Value::str(asker));
         let _ = ds.set(v.object, "policy", Value::str(c.takeover.name()));
         let connected = c.holder.is_some() && c.gone.is_none();

@@ -225,3 +225,27 @@ fn the_sites_own_calls_come_from_its_operator() {
     let out = w.ds.call_wait(o, "request", vec![], None);
     assert!(matches!(&out, CallOutcome::Refused(r) if r.contains("--operator NAME")), "{out:?}");
 }
+
+/// A vehicle whose protocol module says another ground station holds it (MAVLink's
+/// operator-control protocol: `gcs_in_control`, `control` = `gcs 200`): every OCU sees that
+/// holder, and every operator's command is refused with it named, holder here or not.
+#[test]
+fn a_vehicle_held_by_another_ground_station_shows_it_and_refuses_every_operators_commands() {
+    let w = world();
+    let v = w.ds.resolve(&["vehicles", "usv1"]).unwrap();
+    assert_eq!(w.now("usv1", "request", alice()), ok());
+    w.ds.set(v, "gcs_in_control", Value::Int(200)).unwrap();
+    w.ds.set(v, "control", Value::str("gcs 200")).unwrap();
+    w.ds.quiesce();
+    assert_eq!(w.prop("usv1", "holder"), Value::str("gcs 200"));
+    for who in [alice(), bob()] {
+        let refused = w.screen("vehicles.usv1", "start_engine", &who).unwrap_err();
+        assert!(refused.contains("gcs 200, another ground station"), "{refused}");
+    }
+    // Without the protocol a `control` that reads the same is only the module's own word.
+    let v2 = w.ds.resolve(&["vehicles", "usv2"]).unwrap();
+    assert_eq!(w.now("usv2", "request", alice()), ok());
+    w.ds.set(v2, "control", Value::str("gcs 7")).unwrap();
+    w.ds.quiesce();
+    assert_eq!(w.screen("vehicles.usv2", "start_engine", &alice()), Ok(()));
+}

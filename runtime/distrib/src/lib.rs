@@ -18,6 +18,7 @@
 pub mod arbiter;
 mod calls;
 pub mod control;
+mod gcs;
 pub mod keys;
 mod mirror;
 mod module;

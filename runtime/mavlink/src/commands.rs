@@ -6,7 +6,7 @@
 use crate::lenient::CommandAck;
 use crate::link::{After, Link};
 use crate::vehicle::{Pending, Vehicle};
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mocu_dataserver::{Call, CallOutcome};
 
 /// Why nothing may be sent to `v`, if so.
@@ -182,6 +182,16 @@ impl Link {
             return;
         };
         let outcome = match ack.result.known {
+            // The vehicle's GCS in control asks before a takeover (MAVLink's operator-control
+            // protocol): a refusal with the holder's name, not a failure.
+            Some(MavResult::MAV_RESULT_FAILED)
+                if ack.command == MavCmd::MAV_CMD_REQUEST_OPERATOR_CONTROL =>
+            {
+                let holder = v.gcs.map_or(0, |g| g.main);
+                CallOutcome::Refused(format!(
+                    "the vehicle is controlled by gcs {holder}, which must allow a takeover"
+                ))
+            }
             Some(MavResult::MAV_RESULT_ACCEPTED) => CallOutcome::Accepted(vec![]),
             Some(MavResult::MAV_RESULT_IN_PROGRESS) => {
                 v.commands[i].attempts = 0;

@@ -6,7 +6,7 @@
 
 use crate::lenient::{self, Msg};
 use crate::signing::{self, Signing};
-use mavlink::dialects::common::MavMessage;
+use mavlink::dialects::development::MavMessage;
 use mavlink::{MavHeader, MavlinkVersion, Message};
 
 /// What one datagram held.

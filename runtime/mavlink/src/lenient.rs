@@ -4,7 +4,7 @@
 //! rest of the message is parsed as usual, so the vehicle still appears and shows
 //! `unknown(42)` where a name would be.
 
-use mavlink::dialects::common::{
+use mavlink::dialects::development::{
     GPS_RAW_INT_DATA, GpsFixType, HEARTBEAT_DATA, MavAutopilot, MavCmd, MavMessage, MavModeFlag,
     MavResult, MavState, MavType,
 };

@@ -10,7 +10,7 @@ use crate::lenient::Msg;
 use crate::signing::Signing;
 use crate::vehicle::{self, Vehicle};
 use mavlink::MavHeader;
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mocu_dataserver::{CallOutcome, DsError, Guid, Responder, Value};
 use mocu_host::ModuleContext;
 use mocu_host::world;

@@ -1,10 +1,10 @@
 //! The methods a MAVLink vehicle publishes in the world model (`arm`, `set_mode`, `goto`,
-//! `return_home`, `land`, `upload_route`, `request_control`); each becomes a command or the
+//! `return_home`, `land`, `upload_route`, `request_control`, `release_control`); each becomes a command or the
 //! mission protocol (`commands.rs`).
 
 use crate::link::Link;
 use crate::modes;
-use mavlink::dialects::common::{MavCmd, MavModeFlag};
+use mavlink::dialects::development::{MavCmd, MavModeFlag};
 use mocu_dataserver::{Call, CallOutcome, DsError, Guid, MethodSpec, ParamSpec, Value, ValueKind};
 
 impl Link {
@@ -103,7 +103,9 @@ impl Link {
         ds.publish_method_on(
             ex,
             guid,
-            MethodSpec::new("request_control").param(p("operator", S)),
+            MethodSpec::new("request_control")
+                .param(p("operator", S))
+                .describe("Take control for an operator: asked of the vehicle where it speaks the GCS operator-control protocol"),
             move |c: Call| {
                 let op = c.args[0].as_str().unwrap_or("").to_string();
                 let mut st = me.inner.state.lock();
@@ -113,9 +115,22 @@ impl Link {
                     return;
                 };
                 let v = st.vehicles.get_mut(&sys).expect("by_guid and vehicles agree");
-                let outcome = if op.is_empty() {
-                    CallOutcome::Refused("an operator name is needed".into())
-                } else if !v.control.is_empty() && v.control != op {
+                if op.is_empty() {
+                    drop(st);
+                    c.responder.refuse("an operator name is needed");
+                    return;
+                }
+                if v.gcs.is_some() {
+                    // The vehicle decides (MAV_CMD_REQUEST_OPERATOR_CONTROL): control for this
+                    // adapter's system id, others asked before they take it over.
+                    v.requester = op;
+                    drop(st);
+                    let ours = f32::from(me.inner.cfg.system_id);
+                    let cmd = MavCmd::MAV_CMD_REQUEST_OPERATOR_CONTROL;
+                    me.command(c, "request_control", cmd, [1.0, 0.0, 10.0, ours, 0.0, 0.0, 0.0]);
+                    return;
+                }
+                let outcome = if !v.control.is_empty() && v.control != op {
                     CallOutcome::Refused(format!("control held by {}", v.control))
                 } else {
                     v.control = op.clone();
@@ -124,6 +139,33 @@ impl Link {
                 };
                 drop(st);
                 c.responder.reply(outcome);
+            },
+        )?;
+        let me = self.clone();
+        ds.publish_method_on(
+            ex,
+            guid,
+            MethodSpec::new("release_control")
+                .describe("Give control back (to the vehicle, where it speaks the GCS operator-control protocol)"),
+            move |c: Call| {
+                let mut st = me.inner.state.lock();
+                let Some(sys) = st.by_guid.get(&c.object).copied() else {
+                    drop(st);
+                    c.responder.reply(CallOutcome::NoSuchObject);
+                    return;
+                };
+                let v = st.vehicles.get_mut(&sys).expect("by_guid and vehicles agree");
+                if v.gcs.is_some() {
+                    drop(st);
+                    let ours = f32::from(me.inner.cfg.system_id);
+                    let cmd = MavCmd::MAV_CMD_REQUEST_OPERATOR_CONTROL;
+                    me.command(c, "release_control", cmd, [0.0, 0.0, 10.0, ours, 0.0, 0.0, 0.0]);
+                    return;
+                }
+                v.control.clear();
+                let _ = me.inner.ctx.ds.set(v.guid, "control", Value::str(""));
+                drop(st);
+                c.responder.reply(CallOutcome::Accepted(vec![]));
             },
         )?;
         Ok(())

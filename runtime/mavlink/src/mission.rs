@@ -15,7 +15,7 @@
 use crate::commands::can_send;
 use crate::link::{After, Link};
 use crate::vehicle::Vehicle;
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mocu_dataserver::{Call, CallOutcome, DataServer, Guid, Responder, Value};
 use mocu_host::world;
 

@@ -1,7 +1,7 @@
 //! Flight-mode names: ArduPilot's custom modes by vehicle family; other autopilots show
 //! `custom:<n>`.
 
-use mavlink::dialects::common::{MavAutopilot, MavType};
+use mavlink::dialects::development::{MavAutopilot, MavType};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Family {

@@ -7,8 +7,8 @@ use crate::config::Reason;
 use crate::lenient::{GpsRaw, Heartbeat};
 use crate::link::Link;
 use crate::modes;
-use crate::vehicle::Vehicle;
-use mavlink::dialects::common::*;
+use crate::vehicle::{GcsControl, Vehicle};
+use mavlink::dialects::development::*;
 use mocu_dataserver::Value;
 
 /// Two consecutive positions closer than this (metres) may become home.
@@ -42,6 +42,39 @@ impl Link {
         let _ = ds.set(g, "link", Value::Float(link));
     }
 
+    /// The GCS operator-control protocol (CONTROL_STATUS from the system manager): the GCS in
+    /// control, shown as the vehicle's `control` — the operator this adapter asked for it
+    /// when it is ours, `gcs N` when another ground station holds it, empty when none.
+    pub(crate) fn control_status(&self, v: &mut Vehicle, c: &CONTROL_STATUS_DATA) {
+        if !c.flags.contains(GcsControlStatusFlags::GCS_CONTROL_STATUS_FLAGS_SYSTEM_MANAGER) {
+            return;
+        }
+        let ds = &self.inner.ctx.ds;
+        let g = v.guid;
+        let takeover_allowed =
+            c.flags.contains(GcsControlStatusFlags::GCS_CONTROL_STATUS_FLAGS_TAKEOVER_ALLOWED);
+        let first = v.gcs.is_none();
+        v.gcs = Some(GcsControl { main: c.gcs_main, takeover_allowed });
+        if first {
+            self.inner.ctx.report(
+                mocu_host::Level::Info,
+                format!("mav{}: speaks the GCS operator-control protocol", v.sysid),
+            );
+        }
+        let _ = ds.set(g, "gcs_in_control", Value::Int(i64::from(c.gcs_main)));
+        let _ = ds.set(g, "gcs_takeover_allowed", Value::Bool(takeover_allowed));
+        let ours = self.inner.cfg.system_id;
+        let control = match c.gcs_main {
+            0 => String::new(),
+            m if m == ours && !v.requester.is_empty() => v.requester.clone(),
+            m => format!("gcs {m}"),
+        };
+        if control != v.control {
+            v.control = control;
+            let _ = ds.set(g, "control", Value::str(&v.control));
+        }
+    }
+
     pub(crate) fn gps_raw(&self, v: &mut Vehicle, gps: &GpsRaw) {
         let ds = &self.inner.ctx.ds;
         let n = v.nav;
@@ -60,6 +93,7 @@ impl Link {
         let (g, n) = (v.guid, v.nav);
         match msg {
             MavMessage::GLOBAL_POSITION_INT(p) => self.position(v, p)?,
+            MavMessage::CONTROL_STATUS(c) => self.control_status(v, c),
             MavMessage::ATTITUDE(a) => {
                 let pi = std::f32::consts::PI + ANGLE_SLACK;
                 let ok = a.roll.abs() <= pi

@@ -6,7 +6,7 @@ use crate::link::Link;
 use crate::mission::{Mission, Upload};
 use crate::modes::{self, Family};
 use mavlink::MavHeader;
-use mavlink::dialects::common::{MavAutopilot, MavCmd, MavMessage, MavType};
+use mavlink::dialects::development::{MavAutopilot, MavCmd, MavMessage, MavType};
 use mocu_dataserver::{DsError, Guid, ObjectInfo, Responder, Value};
 use mocu_host::world::{self, RouteFrame, boolean, float, float_in, int, string};
 use std::net::SocketAddr;
@@ -31,6 +31,13 @@ pub(crate) struct Pending {
     pub msg: MavMessage,
     pub attempts: u32,
     pub responder: Responder,
+}
+
+/// What the vehicle's CONTROL_STATUS says (docs/distribution.md, "Control arbitration").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct GcsControl {
+    pub main: u8,
+    pub takeover_allowed: bool,
 }
 
 /// An address being proved: heartbeats seen from it, in sequence.
@@ -62,6 +69,11 @@ pub(crate) struct Vehicle {
     /// The last GPS fix type heard (raw), if any.
     pub gps_fix: Option<u8>,
     pub control: String,
+    /// The GCS operator-control protocol, once the vehicle streams CONTROL_STATUS: the
+    /// system id of the GCS in control (0: none) and whether a takeover is granted at once.
+    pub gcs: Option<GcsControl>,
+    /// The operator this adapter asked the vehicle's control for.
+    pub requester: String,
     pub commands: Vec<Pending>,
     pub upload: Option<Upload>,
     /// The route the vehicle holds, kept in step by deltas (`mission.rs`).
@@ -217,6 +229,8 @@ impl Link {
             home_candidate: None,
             gps_fix: None,
             control: String::new(),
+            gcs: None,
+            requester: String::new(),
             commands: Vec::new(),
             upload: None,
             mission: None,

@@ -4,7 +4,7 @@
 //! fed to a link. Nothing panics, every datagram is accounted for, the vehicles stay
 //! bounded with plausible values, and no mutated frame passes a signed link.
 
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mavlink::{MavHeader, Message};
 use mocu_dataserver::{Config, DataServer, ManualClock, Value};
 use mocu_host::ModuleContext;

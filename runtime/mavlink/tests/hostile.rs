@@ -4,7 +4,7 @@
 //! are answered, commands never truncate a system id, and a link with a key accepts only
 //! frames signed with it. (runtime/mavlink/tests/crafted_peers.rs sends the same from pymavlink.)
 
-use mavlink::dialects::common::*;
+use mavlink::dialects::development::*;
 use mavlink::{MavHeader, Message};
 use mocu_dataserver::{CallOutcome, Config, DataServer, Guid, ManualClock, Value};
 use mocu_host::ModuleContext;
