@@ -13,13 +13,14 @@
 //! `fanout adapter PORT SECS` and `fanout ocu PORT NAME SECS` are its children.
 
 use mocu_dataserver::{DataServer, Guid, ObjectInfo, PropMeta, PropName, Value, ValueKind};
-use mocu_distrib::{Config, Distrib};
+use mocu_distrib::{Config, Distrib, payload};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{Shutdown, TcpListener, TcpStream};
 use std::process::{Command, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
+use zenoh::Wait;
 
 const VEHICLES: usize = 100;
 const PROPS: usize = 50;
@@ -31,7 +32,19 @@ fn main() {
     match args.first().map(String::as_str) {
         Some("adapter") => adapter(args[1].parse().unwrap(), args[2].parse().unwrap()),
         Some("ocu") => ocu(args[1].parse().unwrap(), &args[2], args[3].parse().unwrap()),
-        secs => lead(secs.and_then(|s| s.parse().ok()).unwrap_or(10.0)),
+        Some("bare-adapter") => bare_adapter(args[1].parse().unwrap(), args[2].parse().unwrap()),
+        Some("bare-ocu") => bare_ocu(args[1].parse().unwrap(), args[3].parse().unwrap()),
+        secs => {
+            let secs = secs.and_then(|s| s.parse().ok()).unwrap_or(10.0);
+            let bare = lead(secs, "bare-");
+            let ours = lead(secs, "");
+            println!(
+                "ratio to bare Zenoh (same payloads, same rate, same run): adapter {:.2}x, OCUs {:.2}x CPU; bytes {:.2}x",
+                ours.adapter_cpu / bare.adapter_cpu,
+                ours.ocu_cpu / bare.ocu_cpu,
+                ours.bytes / bare.bytes,
+            );
+        }
     }
 }
 
@@ -39,9 +52,10 @@ fn main() {
 fn cpu() -> Duration {
     let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let after = stat.rsplit_once(") ").map_or("", |(_, r)| r);
-    let f: Vec<u64> = after.split(' ').filter_map(|x| x.parse().ok()).collect();
-    // Fields 14 and 15 of the file (utime, stime); `after` starts at field 3.
-    let ticks = f.get(11).copied().unwrap_or(0) + f.get(12).copied().unwrap_or(0);
+    let f: Vec<&str> = after.split(' ').collect();
+    // Fields 14 and 15 of the file (utime, stime); `after` starts at field 3 (the state).
+    let field = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+    let ticks = field(11) + field(12);
     Duration::from_millis(ticks * 10)
 }
 
@@ -110,6 +124,68 @@ fn ocu(port: u16, name: &str, secs: f64) {
     let applied = d.mirror_stats.applied.load(Ordering::Relaxed);
     println!("cpu {} applied {applied}", (cpu() - cpu0).as_secs_f64());
     d.stop();
+}
+
+/// The baseline: the same JSON property payloads put on the same keys at the same rate by a
+/// bare Zenoh session, no DataServer on either side.
+fn bare_adapter(port: u16, secs: f64) {
+    let cfg = Config { listen: vec![format!("tcp/127.0.0.1:{port}")], ..Config::default() };
+    let session = zenoh::open(mocu_distrib::zenoh_config(&cfg).unwrap()).wait().unwrap();
+    let guid = Guid::new(4).unwrap();
+    let keys: Vec<String> = (0..VEHICLES * PROPS)
+        .map(|i| format!("mocu/bare/prop/vehicles/v{}/p{}", i / PROPS, i % PROPS))
+        .collect();
+    println!("ready");
+    let mut line = String::new();
+    let _ = std::io::stdin().read_line(&mut line);
+    let (start, cpu0) = (Instant::now(), cpu());
+    let ticks = (secs * HZ) as u64;
+    for tick in 1..=ticks {
+        for (i, key) in keys.iter().enumerate() {
+            let v = Value::Float(tick as f64 + i as f64 * 1e-6);
+            let _ = session.put(key.as_str(), payload::property(guid, &v, None)).wait();
+        }
+        let due = start + Duration::from_secs_f64(tick as f64 / HZ);
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    let wall = start.elapsed();
+    println!(
+        "cpu {} wall {} puts {}",
+        (cpu() - cpu0).as_secs_f64(),
+        wall.as_secs_f64(),
+        ticks as usize * keys.len()
+    );
+    let _ = std::io::stdin().read_line(&mut line);
+    let _ = session.close().wait();
+}
+
+fn bare_ocu(port: u16, secs: f64) {
+    let cfg = Config { connect: vec![format!("tcp/127.0.0.1:{port}")], ..Config::default() };
+    let session = zenoh::open(mocu_distrib::zenoh_config(&cfg).unwrap()).wait().unwrap();
+    let last_tick = (secs * HZ) as u64;
+    let want = last_tick as f64 + ((VEHICLES * PROPS - 1) as f64) * 1e-6;
+    let (tx, rx) = std::sync::mpsc::channel();
+    let got = Arc::new(AtomicU64::new(0));
+    let g = got.clone();
+    let _sub = session
+        .declare_subscriber("mocu/bare/prop/**")
+        .callback(move |s| {
+            g.fetch_add(1, Ordering::Relaxed);
+            // Decoded as a mirror decodes it, so both sides parse the same JSON.
+            if let Ok((Value::Float(x), _)) = payload::property_from(&s.payload().to_bytes())
+                && x == want
+            {
+                let _ = tx.send(());
+            }
+        })
+        .wait()
+        .unwrap();
+    // The subscription must reach the publisher before the clock starts.
+    std::thread::sleep(Duration::from_secs(1));
+    println!("ready");
+    let cpu0 = cpu();
+    rx.recv_timeout(Duration::from_secs_f64(secs + 60.0)).expect("the last tick never arrived");
+    println!("cpu {} applied {}", (cpu() - cpu0).as_secs_f64(), got.load(Ordering::Relaxed));
 }
 
 /// A TCP relay to `target` that counts the bytes it carries towards the connecting side.
@@ -181,10 +257,17 @@ impl Child {
     }
 }
 
-fn lead(secs: f64) {
+/// What one run measured: CPU seconds (adapter; OCUs summed) and bytes on the OCUs' links.
+struct Run {
+    adapter_cpu: f64,
+    ocu_cpu: f64,
+    bytes: f64,
+}
+
+fn lead(secs: f64, role: &str) -> Run {
     let port = TcpListener::bind("127.0.0.1:0").unwrap().local_addr().unwrap().port();
     let s = secs.to_string();
-    let mut adapter = Child::start(&["adapter".into(), port.to_string(), s.clone()]);
+    let mut adapter = Child::start(&[format!("{role}adapter"), port.to_string(), s.clone()]);
     assert_eq!(adapter.line(), "ready");
     let counts: Vec<Arc<AtomicU64>> = (0..OCUS).map(|_| Arc::new(AtomicU64::new(0))).collect();
     let mut ocus: Vec<Child> = counts
@@ -192,7 +275,7 @@ fn lead(secs: f64) {
         .enumerate()
         .map(|(i, c)| {
             let via = relay(port, c.clone());
-            Child::start(&["ocu".into(), via.to_string(), format!("ocu{i}"), s.clone()])
+            Child::start(&[format!("{role}ocu"), via.to_string(), format!("ocu{i}"), s.clone()])
         })
         .collect();
     for o in &mut ocus {
@@ -209,8 +292,10 @@ fn lead(secs: f64) {
     }
     let wall = Child::figure(&a, "wall");
     let changes = (secs * HZ) as usize * VEHICLES * PROPS;
+    let what =
+        if role.is_empty() { "the distributed world model" } else { "bare Zenoh (baseline)" };
     println!(
-        "fan-out: {VEHICLES} vehicles x {PROPS} properties at {HZ} Hz to {OCUS} OCUs, {secs} s ({changes} changes)"
+        "{what}: {VEHICLES} vehicles x {PROPS} properties at {HZ} Hz to {OCUS} OCUs, {secs} s ({changes} changes)"
     );
     println!(
         "adapter: CPU {:.2} s in {wall:.2} s = {:.0}% of a core; {} puts",
@@ -229,5 +314,11 @@ fn lead(secs: f64) {
             bytes as f64 / wall / 1e3 / VEHICLES as f64,
             bytes as f64 / changes as f64,
         );
+    }
+    let total: u64 = counts.iter().zip(&before).map(|(c, b)| c.load(Ordering::Relaxed) - b).sum();
+    Run {
+        adapter_cpu: Child::figure(&a, "cpu"),
+        ocu_cpu: reports.iter().map(|r| Child::figure(r, "cpu")).sum(),
+        bytes: total as f64,
     }
 }
