@@ -21,6 +21,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 use zenoh::Wait;
+use zenoh::qos::CongestionControl;
 
 const VEHICLES: usize = 100;
 const PROPS: usize = 50;
@@ -143,7 +144,9 @@ fn bare_adapter(port: u16, secs: f64) {
     for tick in 1..=ticks {
         for (i, key) in keys.iter().enumerate() {
             let v = Value::Float(tick as f64 + i as f64 * 1e-6);
-            let _ = session.put(key.as_str(), payload::property(guid, &v, None)).wait();
+            let put = session.put(key.as_str(), payload::property(guid, &v, None));
+            // As the publisher puts a property: blocking, never dropped.
+            let _ = put.congestion_control(CongestionControl::Block).wait();
         }
         let due = start + Duration::from_secs_f64(tick as f64 / HZ);
         std::thread::sleep(due.saturating_duration_since(Instant::now()));

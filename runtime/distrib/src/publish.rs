@@ -20,6 +20,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 use zenoh::Wait;
+use zenoh::qos::CongestionControl;
 use zenoh::query::Query;
 
 /// A tracked object: on the way to a shared subtree, or in one (`shared`).
@@ -238,7 +239,10 @@ impl Publisher {
         let key = keys::property(&self.site, &n.path, name.as_str());
         let m = if send_meta { meta.as_deref() } else { None };
         let bytes = payload::property(guid, &value, m);
-        if self.session.put(key, bytes).wait().is_ok() {
+        // Blocking, never dropped under congestion: a lost update would leave the mirror
+        // showing an old value, as fresh, until the property changes again.
+        let put = self.session.put(key, bytes).congestion_control(CongestionControl::Block);
+        if put.wait().is_ok() {
             self.stats.puts.fetch_add(1, Ordering::Relaxed);
         }
     }
@@ -247,7 +251,9 @@ impl Publisher {
         let Some(n) = self.nodes.get(&guid) else { return };
         let rec =
             ObjectRecord { guid: guid.get(), info: n.info.clone(), methods: n.methods.clone() };
-        let _ = self.session.put(keys::object(&self.site, &n.path), payload::object(&rec)).wait();
+        let key = keys::object(&self.site, &n.path);
+        let put = self.session.put(key, payload::object(&rec));
+        let _ = put.congestion_control(CongestionControl::Block).wait();
     }
 
     /// Methods are not in the change feed: a shared object whose properties changed in
