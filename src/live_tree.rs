@@ -84,9 +84,84 @@ impl LiveTree for WorldMirror {
     }
 }
 
-/// The endpoints the client asks for in its `initializationOptions`
-/// (`{"live": {"connect": ["tcp/127.0.0.1:7447"]}}`).
-pub fn endpoints_of(options: Option<&serde_json::Value>) -> Vec<String> {
+/// The endpoints of the client's `initialize` parameters: what its `initializationOptions`
+/// ask for (`{"live": {"connect": ["tcp/127.0.0.1:7447"]}}`), then what the project profile
+/// of its workspace folder says in `[modules.distrib]` (`connect`, and `listen` as a local
+/// client reaches it: the OCU that profile runs listens there).
+pub fn endpoints_of(init: Option<&serde_json::Value>) -> Vec<String> {
+    let mut out = asked_for(init.and_then(|i| i.get("initializationOptions")));
+    let root = init.and_then(workspace_root);
+    for e in root.map(|r| profile_endpoints(&r)).unwrap_or_default() {
+        if !out.contains(&e) {
+            out.push(e);
+        }
+    }
+    out
+}
+
+/// The workspace folder of `initialize` (`workspaceFolders[0]`, else `rootUri`, else
+/// `rootPath`), as a path.
+fn workspace_root(init: &serde_json::Value) -> Option<std::path::PathBuf> {
+    let uri = init
+        .pointer("/workspaceFolders/0/uri")
+        .or_else(|| init.get("rootUri"))
+        .and_then(|u| u.as_str());
+    match uri {
+        Some(u) => u.strip_prefix("file://").map(|p| percent_decoded(p).into()),
+        None => init.get("rootPath").and_then(|p| p.as_str()).map(Into::into),
+    }
+}
+
+fn percent_decoded(s: &str) -> String {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        let hex = (b[i] == b'%').then(|| s.get(i + 1..i + 3)).flatten();
+        match hex.and_then(|h| u8::from_str_radix(h, 16).ok()) {
+            Some(x) => {
+                out.push(x);
+                i += 3;
+            }
+            None => {
+                out.push(b[i]);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// `[modules.distrib]` of the project profile in `root` (`project.toml` there, or in one of
+/// its folders, `layouts/project.toml` in this repository): `connect`, and `listen` made
+/// reachable from this machine.
+fn profile_endpoints(root: &std::path::Path) -> Vec<String> {
+    let mut candidates = vec![root.join("project.toml")];
+    if let Ok(dir) = std::fs::read_dir(root) {
+        let mut sub: Vec<_> = dir.flatten().map(|e| e.path().join("project.toml")).collect();
+        sub.sort();
+        candidates.extend(sub);
+    }
+    let Some(text) = candidates.iter().find_map(|p| std::fs::read_to_string(p).ok()) else {
+        return Vec::new();
+    };
+    let Ok(profile) = text.parse::<toml::Table>() else { return Vec::new() };
+    let distrib = profile.get("modules").and_then(|m| m.get("distrib"));
+    let list = |key: &str| -> Vec<String> {
+        match distrib.and_then(|d| d.get(key)) {
+            Some(toml::Value::String(s)) => vec![s.clone()],
+            Some(toml::Value::Array(xs)) => {
+                xs.iter().filter_map(|x| x.as_str().map(String::from)).collect()
+            }
+            _ => Vec::new(),
+        }
+    };
+    let listen = list("listen").into_iter().map(|e| crate::process_modules::reachable(&e));
+    list("connect").into_iter().chain(listen).collect()
+}
+
+/// The endpoints the client asks for in its `initializationOptions`.
+fn asked_for(options: Option<&serde_json::Value>) -> Vec<String> {
     let list = options.and_then(|o| o.pointer("/live/connect"));
     match list {
         Some(serde_json::Value::String(s)) => vec![s.clone()],
@@ -104,11 +179,37 @@ mod tests {
 
     #[test]
     fn the_endpoints_come_from_the_live_connect_initialization_option() {
-        let one = json!({"live": {"connect": "tcp/127.0.0.1:7447"}});
+        let opts = |o| json!({ "initializationOptions": o });
+        let one = opts(json!({"live": {"connect": "tcp/127.0.0.1:7447"}}));
         assert_eq!(endpoints_of(Some(&one)), vec!["tcp/127.0.0.1:7447"]);
-        let two = json!({"live": {"connect": ["tcp/a:1", "tcp/b:2"]}});
+        let two = opts(json!({"live": {"connect": ["tcp/a:1", "tcp/b:2"]}}));
         assert_eq!(endpoints_of(Some(&two)), vec!["tcp/a:1", "tcp/b:2"]);
-        assert!(endpoints_of(Some(&json!({"other": 1}))).is_empty());
+        assert!(endpoints_of(Some(&opts(json!({"other": 1})))).is_empty());
         assert!(endpoints_of(None).is_empty());
+    }
+
+    #[test]
+    fn the_workspaces_project_profile_says_where_its_ocu_is_without_any_option() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path().join("work space");
+        let layouts = root.join("my layouts");
+        std::fs::create_dir_all(&layouts).unwrap();
+        std::fs::write(
+            layouts.join("project.toml"),
+            "[profile]\nname = \"p\"\n[modules.distrib]\nconnect = [\"tcp/10.0.0.5:7447\"]\nlisten = \"tcp/0.0.0.0:7448\"\n",
+        )
+        .unwrap();
+        let uri = format!("file://{}", root.display()).replace(' ', "%20");
+        let init = json!({
+            "workspaceFolders": [{"uri": uri, "name": "w"}],
+            "initializationOptions": {"live": {"connect": "tcp/127.0.0.1:9"}},
+        });
+        assert_eq!(
+            endpoints_of(Some(&init)),
+            vec!["tcp/127.0.0.1:9", "tcp/10.0.0.5:7447", "tcp/127.0.0.1:7448"]
+        );
+        // A workspace without a profile, or a profile without distribution: nothing more.
+        let bare = json!({"rootUri": "file:///nonexistent/folder"});
+        assert!(endpoints_of(Some(&bare)).is_empty());
     }
 }

@@ -56,7 +56,7 @@ fn free_loopback_port() -> std::io::Result<u16> {
 }
 
 /// A listening endpoint as a local child connects to it: a wildcard address becomes loopback.
-fn reachable(endpoint: &str) -> String {
+pub(crate) fn reachable(endpoint: &str) -> String {
     endpoint.replace("/0.0.0.0:", "/127.0.0.1:").replace("/[::]:", "/[::1]:")
 }
 

@@ -85,8 +85,8 @@ pub fn serve(connection: Connection) -> Result<(), String> {
     serve_with(connection, Options::default())
 }
 
-/// Makes the server's live world values from the client's `initializationOptions` (`None`
-/// when it sent none), once the client has said them.
+/// Makes the server's live world values from the client's `initialize` parameters (its
+/// `initializationOptions`, its workspace folder), once the client has said them.
 pub type LiveSource = Box<dyn FnOnce(Option<&serde_json::Value>) -> Box<dyn live::LiveTree>>;
 
 /// How a server is set up.
@@ -111,7 +111,7 @@ pub fn serve_with(connection: Connection, options: Options) -> Result<(), String
     let Options { timing, live } = options;
     let caps = serde_json::to_value(capabilities()).map_err(|e| e.to_string())?;
     let init = connection.initialize(caps).map_err(|e| e.to_string())?;
-    let live = live(init.get("initializationOptions").filter(|o| !o.is_null()));
+    let live = live(Some(&init));
     let (jobs, rx) = crossbeam_channel::unbounded();
     let analyses = Analyses::default();
     let worker = check::spawn_worker(rx, connection.sender.clone(), analyses.clone(), timing)
