@@ -18,18 +18,29 @@ pub fn start(
     layout: &str,
     manual_clock: bool,
 ) -> Result<Arc<Recorder>, String> {
-    let header = Header {
-        command: std::env::args().collect::<Vec<_>>().join(" "),
-        target: target_name(target),
-        layout: layout.to_string(),
-        clock: if manual_clock { "manual" } else { "system" }.into(),
-        bundle: Some(mocu_language::bundle::write(&target.bundle)),
-    };
-    Recorder::start(ds, path, header).map(Arc::new)
+    let name = target.bundle.layouts.first().map(|l| l.path.clone()).unwrap_or_default();
+    start_with(ds, path, &name, Some(&target.bundle), layout, manual_clock)
 }
 
-fn target_name(target: &crate::run::Target) -> String {
-    target.bundle.layouts.first().map(|l| l.path.clone()).unwrap_or_default()
+/// [`start`] for what may have no layout: `mocu serve`'s adapter records its world model
+/// with the profile's bundle when it has one (a replay shows it through its first layout,
+/// or through `--layout`), with none otherwise.
+pub fn start_with(
+    ds: &DataServer,
+    path: &Path,
+    target: &str,
+    bundle: Option<&mocu_language::Bundle>,
+    layout: &str,
+    manual_clock: bool,
+) -> Result<Arc<Recorder>, String> {
+    let header = Header {
+        command: std::env::args().collect::<Vec<_>>().join(" "),
+        target: target.to_string(),
+        layout: layout.to_string(),
+        clock: if manual_clock { "manual" } else { "system" }.into(),
+        bundle: bundle.map(mocu_language::bundle::write),
+    };
+    Recorder::start(ds, path, header).map(Arc::new)
 }
 
 /// Where the trial's events go: the `--log` lines and the recording, each event once,
@@ -65,6 +76,13 @@ impl EventSink for TrialSink {
             r.event_at(at(time), &source, event, &rest);
         }
     }
+}
+
+/// A module's trial event (`HostEvent::Record`) into `sink`, named by its module.
+pub fn module_event(sink: &dyn EventSink, module: &str, event: &str, fields: &[(String, Value)]) {
+    let mut f: Vec<(&str, Value)> = vec![("module", Value::str(module))];
+    f.extend(fields.iter().map(|(k, v)| (k.as_str(), v.clone())));
+    sink.record(event, &f);
 }
 
 fn at(secs: f64) -> SystemTime {

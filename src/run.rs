@@ -519,9 +519,7 @@ fn report(e: HostEvent, sink: &Arc<dyn EventSink>) {
                 eprintln!("mocu: {module}: {l}{text}");
             }
             HostEvent::Record { module, event, fields } => {
-                let mut f: Vec<(&str, Value)> = vec![("module", Value::str(&module))];
-                f.extend(fields.iter().map(|(k, v)| (k.as_str(), v.clone())));
-                sink.record(&event, &f);
+                crate::record::module_event(sink.as_ref(), &module, &event, &fields)
             }
         }
     }

@@ -87,13 +87,21 @@ pub struct ServeArgs {
     /// Leave the built-in simulator out.
     #[arg(long)]
     pub no_sim: bool,
+    /// Record the adapter's world model (telemetry, calls and their outcomes, the modules'
+    /// events, camera frames) to an MCAP file (docs/recording.md); `mocu replay` shows it.
+    #[arg(long, value_name = "TRIAL.mcap")]
+    pub record: Option<PathBuf>,
 }
 
 pub fn main(args: ServeArgs) -> ExitCode {
+    let mut bundle = None;
     let profile_specs = match &args.profile {
         None => None,
         Some(p) => match crate::run::load_target(p) {
-            Ok(t) => t.modules,
+            Ok(t) => {
+                bundle = Some(t.bundle);
+                t.modules
+            }
             Err(crate::run::TargetError::Io(e)) => {
                 eprintln!("mocu serve: {e}");
                 return ExitCode::from(2);
@@ -131,6 +139,23 @@ pub fn main(args: ServeArgs) -> ExitCode {
 
     let stop = crate::stop::on_signals();
     let ds = DataServer::default();
+    // `--record`: from the first change on, before any module starts.
+    let recorder = match &args.record {
+        None => None,
+        Some(p) => {
+            let target = args.profile.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+            let layout = bundle.as_ref().and_then(|b| b.layouts.first()).map(|l| l.path.clone());
+            let layout = layout.unwrap_or_default();
+            match crate::record::start_with(&ds, p, &target, bundle.as_ref(), &layout, false) {
+                Ok(r) => Some(r),
+                Err(e) => {
+                    eprintln!("mocu serve: --record {}: {e}", p.display());
+                    return ExitCode::from(2);
+                }
+            }
+        }
+    };
+    let sink = crate::record::TrialSink { ds: ds.clone(), log: None, recorder: recorder.clone() };
     let mut host = ModuleHost::new(ds.clone(), crate::run::registry());
     let events = host.events();
     host.start_all(&specs);
@@ -142,7 +167,7 @@ pub fn main(args: ServeArgs) -> ExitCode {
         crossbeam_channel::select! {
             recv(stop.requests) -> _ => break,
             recv(events) -> e => match e {
-                Ok(e) => report(e),
+                Ok(e) => report(e, &sink),
                 Err(_) => break,
             },
             default(Duration::from_secs(1)) => {}
@@ -155,23 +180,36 @@ pub fn main(args: ServeArgs) -> ExitCode {
     }
     let guard = crate::stop::bounded_teardown(0);
     host.stop_all();
+    ds.quiesce();
     for e in events.try_iter() {
-        report(e);
+        report(e, &sink);
+    }
+    if let Some(r) = &recorder {
+        match r.finish() {
+            Ok(t) => {
+                eprintln!("mocu: recorded {} messages ({} bytes of JSON)", t.messages, t.bytes)
+            }
+            Err(e) => eprintln!("mocu serve: --record: {e}"),
+        }
     }
     drop(guard);
     ExitCode::SUCCESS
 }
 
-fn report(e: mocu_host::HostEvent) {
+/// Prints one host report on stderr; a module's trial event goes to the recording.
+fn report(e: mocu_host::HostEvent, sink: &crate::record::TrialSink) {
     use mocu_host::HostEvent;
     match e {
+        HostEvent::Record { module, event, fields } => {
+            crate::record::module_event(sink, &module, &event, &fields)
+        }
         HostEvent::Started { module, kind } => eprintln!("mocu: module {module} ({kind}) started"),
         HostEvent::Failed { reason, .. } => eprintln!("mocu: {reason} (the rest keeps running)"),
         HostEvent::Panicked { module, message } => {
             eprintln!("mocu: module {module} panicked and was isolated: {message}")
         }
         HostEvent::Message { module, text, .. } => eprintln!("mocu: {module}: {text}"),
-        HostEvent::Stopped { .. } | HostEvent::Record { .. } => {}
+        HostEvent::Stopped { .. } => {}
     }
 }
 

@@ -430,3 +430,50 @@ fn an_ocu_shows_the_camera_an_adapter_shares_in_its_video_window() {
     assert!(sky > 0.9, "the camera's sky in the video window: {sky:.2} of the pixels");
     drop(adapter);
 }
+
+/// `mocu serve --record`: the adapter's trial on the record (its telemetry, its shared camera's
+/// frames), read back by the independent reader and shown again by `mocu replay` through the
+/// profile's layout.
+#[test]
+fn an_adapter_records_its_world_model_and_replay_shows_it() {
+    let port = free_port();
+    let dir = tempfile::tempdir().unwrap();
+    let trial = dir.path().join("adapter.mcap");
+    let adapter = Proc::start(&[
+        "serve",
+        "tests/distrib/streams.toml",
+        "--listen",
+        &endpoint(port),
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+        "--record",
+        trial.to_str().unwrap(),
+    ]);
+    // The summary is looked at once a second: by its line naming both USVs, the simulator
+    // has run for a second at least.
+    adapter.wait_line(0, "usv1 and usv2", |l| l.contains("vehicles: usv1, usv2"));
+    adapter.signal("-TERM");
+    let (out, lines) = adapter.finish();
+    assert!(out.status.success(), "the adapter failed:\n{}", lines.join("\n"));
+    assert!(lines.iter().any(|l| l.contains("mocu: recorded")), "{}", lines.join("\n"));
+    let r = cli_support::read_recording(&trial, &["root.vehicles.usv1.nav.x"]);
+    assert_eq!(r["summary"], J::Bool(true), "a finished recording: {r}");
+    assert!(r["values"].as_u64().unwrap_or(0) > 0, "telemetry on /world/values: {r}");
+    let xs = r["properties"]["root.vehicles.usv1.nav.x"].as_array().map_or(0, Vec::len);
+    assert!(xs > 2, "usv1's x as it moved: {xs} values");
+    let frames = &r["frames"]["/camera/root.vehicles.usv1.cameras.drive"];
+    assert!(frames["count"].as_u64().unwrap_or(0) > 0, "the shared camera's frames: {r}");
+    // The profile's layout came with it: a replay needs no --layout.
+    let shot = dir.path().join("replay.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_mocu"))
+        .args(["replay", trial.to_str().unwrap(), "--at", "0.5s", "--screenshot"])
+        .arg(&shot)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(shot.exists());
+}

@@ -4,34 +4,15 @@
 //! of them, the telemetry and the operator's calls once each; a recording killed with
 //! SIGKILL opens up to its last complete chunk, with the video as it was received.
 
+mod cli_support;
 #[path = "../runtime/video/tests/peer/mod.rs"]
 mod peer;
 
+use cli_support::{count, read_recording as read};
 use notify::Watcher;
 use serde_json::Value as Json;
-use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
-
-/// The peer's report on a recording (see its docstring).
-fn read(file: &Path, properties: &[&str]) -> Json {
-    let mut cmd = Command::new("python3");
-    cmd.arg("tests/peers/read_recording.py").arg(file);
-    for p in properties {
-        cmd.args(["--property", p]);
-    }
-    let out = cmd.output().expect("python3 runs");
-    assert!(
-        out.status.success(),
-        "the reader failed (is the Python `mcap` package installed? .ci/run pins it): {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
-}
-
-fn count(r: &Json, topic: &str) -> u64 {
-    r["channels"][topic]["count"].as_u64().unwrap_or(0)
-}
 
 const THROTTLE: &str = "root.vehicles.usv1.nav.goal_throttle";
 

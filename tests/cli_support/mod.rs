@@ -36,3 +36,23 @@ pub fn sky_share(png: &std::path::Path, (x0, x1): (u32, u32), (y0, y1): (u32, u3
     }
     sky as f64 / f64::from((x1 - x0) * (y1 - y0))
 }
+
+/// The peer's report on a recording (see its docstring).
+pub fn read_recording(file: &std::path::Path, properties: &[&str]) -> serde_json::Value {
+    let mut cmd = Command::new("python3");
+    cmd.arg("tests/peers/read_recording.py").arg(file);
+    for p in properties {
+        cmd.args(["--property", p]);
+    }
+    let out = cmd.output().expect("python3 runs");
+    assert!(
+        out.status.success(),
+        "the reader failed (is the Python `mcap` package installed? .ci/run pins it): {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+pub fn count(r: &serde_json::Value, topic: &str) -> u64 {
+    r["channels"][topic]["count"].as_u64().unwrap_or(0)
+}
