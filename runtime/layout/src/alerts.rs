@@ -211,14 +211,18 @@ fn follow(sh: &Arc<Shared>, display: Guid, layer: Guid) -> Vec<SubscriptionId> {
     let screen = sh.config.screen;
     for topic in [Topic::properties(folder), Topic::children(display)] {
         let id = Arc::new(OnceLock::<SubscriptionId>::new());
-        let (ds2, id2) = (ds.clone(), id.clone());
+        let (ds2, id2, weak) = (ds.clone(), id.clone(), Arc::downgrade(sh));
         let sub = ds.subscribe_on(&exec, topic, move |_| {
-            if ds2.info(layer).is_err() {
+            let Some(sh) = weak.upgrade().filter(|_| ds2.info(layer).is_ok()) else {
                 if let Some(id) = id2.get() {
                     ds2.unsubscribe_nowait(*id);
                 }
                 return;
-            }
+            };
+            // Under the layout's lock: a window that has just appeared is placed and sized by
+            // the evaluation that holds it, and read half-built (no size yet) it would not be
+            // avoided — a placement from then, written last, covered a vehicle's strip.
+            let _st = sh.state.lock();
             place(&ds2, display, layer, screen);
         });
         if let Ok(sub) = sub {

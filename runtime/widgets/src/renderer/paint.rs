@@ -233,7 +233,15 @@ fn stale_veil(c: &mut dyn Canvas, b: Rect, drawn: Rect, radius: f32, s: f32, roo
         c.restore();
         return;
     }
-    let mid = tag_place(b, area, back(Point::new(0.0, 0.0)), room, s);
+    let Some(mid) = tag_place(b, area, back(Point::new(0.0, 0.0)), room, s) else {
+        // No place leaves the widget's text readable and no neighbour covered (a strip
+        // scaled down to a small screen): an amber outline round the veil says it instead
+        // of the word, over nothing the operator reads.
+        let outline = Rect::new(area.x - 1.0, area.y - 1.0, area.w + 2.0, area.h + 2.0);
+        let stroke = Stroke::new((1.5 * s).max(1.0));
+        c.stroke_rounded_rect(outline, r, &stroke, Color::rgb(0xf5, 0x9e, 0x0b));
+        return;
+    };
     if tw + 8.0 <= area.w {
         c.fill_rounded_rect(back(mid), 3.0, &Brush::Solid(Color::rgba(0, 0, 0, 200)));
     }
@@ -266,8 +274,9 @@ fn covered(t: Rect, texts: &[Rect]) -> f32 {
 /// the widget's text nor the 3 px (at the design's scale) beside it, nearest to where it hides the least in a gauge — the middle of a short,
 /// wide widget, high in the middle of a tall one; where the area has no such place (a
 /// short read-out whose caption and value fill it), just above or below it, on no other
-/// widget, within the damage margin; else inside, where it covers the least.
-fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
+/// widget, within the damage margin; `None` where there is no such place either (the
+/// caller marks the veil instead of covering text).
+fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Option<Point> {
     let want = if area.h < 48.0 * s {
         Point::new(area.x + area.w * 0.5, area.y + area.h / 2.0)
     } else {
@@ -309,8 +318,9 @@ fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
     };
     let (y0, y1) = span(area.y, area.h, tag.h / 2.0);
     let inside = best_in(y0, y1);
-    let mut pick = inside.2;
+    let mut pick = Some(inside.2);
     if inside.0 > 0.0 {
+        pick = None;
         // Just above the area (over its top edge by 2 px) or just below it, inside the
         // margin a damage repaint redraws (`inflate`).
         let above = area.y - tag.h / 2.0 + 2.0;
@@ -345,11 +355,11 @@ fn tag_place(b: Rect, area: Rect, tag: Rect, room: &Room, s: f32) -> Point {
                 && t.y + t.h <= window.y + window.h
                 && !others.iter().any(|o| o.intersects(&t));
             if fits {
-                pick = Point::new(x, y);
+                pick = Some(Point::new(x, y));
                 break;
             }
         }
     }
     // Whole pixels: a damage repaint draws the tag exactly as a full one does.
-    Point::new(pick.x.round(), pick.y.round())
+    pick.map(|p| Point::new(p.x.round(), p.y.round()))
 }
