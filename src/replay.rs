@@ -120,6 +120,19 @@ pub fn main(args: ReplayArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // Network cameras' units are decoded as they play (their windows show what the
+    // operator saw), on the replay server's executor, so a frame is decoded by the time the
+    // replay has settled.
+    let exec = player.ds().serial_executor();
+    let mut decoders = Vec::new();
+    player.set_decoder(Box::new(
+        move |ds, camera, encoded| match mocu_video::attach_replay_decoder(
+            ds, &exec, camera, encoded,
+        ) {
+            Ok(h) => decoders.push(h),
+            Err(e) => eprintln!("mocu replay: no decoder for a camera: {e}"),
+        },
+    ));
     if !player.recording().indexed() {
         eprintln!(
             "mocu replay: {} has no index (the recorder was killed?): read up to its last complete chunk",

@@ -155,4 +155,40 @@ fn a_killed_recording_opens_up_to_its_last_complete_chunk_with_the_video_as_rece
     let head = video["first_bytes_hex"].as_str().unwrap();
     assert!(head == "00000001" || head.starts_with("000001"), "{video}");
     assert!(video["size"].as_u64() > Some(4));
+
+    // Replayed, the units are decoded again: a video window on that camera shows ffmpeg's
+    // test pattern (its colour bars), where it would say NO VIDEO without the decoder.
+    let layout = dir.path().join("camera.mocu");
+    let camera = format!("root.cameras.udp{port}");
+    let text = format!(
+        "window cam {{\n    type \"video\"\n    layer 0\n    rect 0 0 100% 100%\n    source {camera}\n}}\n"
+    );
+    std::fs::write(&layout, text).unwrap();
+    // Trial time counts from the recording's first message (a killed file may have lost
+    // the metadata's `start_ns` with its summary).
+    let firsts = r["channels"].as_object().unwrap().values();
+    let start = firsts.filter_map(|c| c["first_ns"].as_u64()).min().unwrap();
+    let last = r["channels"][topic]["last_ns"].as_u64().unwrap();
+    let at = format!("{:.3}s", (last - start) as f64 / 1e9);
+    let shot = dir.path().join("replayed.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_mocu"))
+        .args(["replay", file.to_str().unwrap(), "--at", &at, "--size", "640x480", "--layout"])
+        .arg(&layout)
+        .arg("--screenshot")
+        .arg(&shot)
+        .env_remove("DISPLAY")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let p = tiny_skia::Pixmap::load_png(&shot).unwrap();
+    let colourful = (0..p.height())
+        .flat_map(|y| (0..p.width()).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let c = p.pixel(x, y).unwrap().demultiply();
+            let (r, g, b) = (c.red(), c.green(), c.blue());
+            r.max(g).max(b) - r.min(g).min(b) > 100
+        })
+        .count();
+    let share = colourful as f64 / f64::from(p.width() * p.height());
+    assert!(share > 0.3, "the replayed video window shows the test pattern: {share:.2} colourful");
 }

@@ -28,7 +28,7 @@ mod world;
 
 pub use file::{Meta, RawMessage, Recording, ReplayError};
 pub use message::{
-    Frame, ObjectChange, PropertyChange, Snapshot, SnapshotObject, ValueEntry, values,
+    Frame, ObjectChange, PropertyChange, Snapshot, SnapshotObject, Unit, ValueEntry, values,
 };
 pub use player::Player;
 pub use world::World;
@@ -41,4 +41,7 @@ pub mod topics {
     pub const VALUES: &str = "/world/values";
     /// Frames of cameras that send pixels: `/camera/<camera path>`.
     pub const CAMERA_PREFIX: &str = "/camera/";
+    /// A network camera's units as received: H.264 (`/video/…`) and JPEG (`/image/…`).
+    pub const VIDEO_PREFIX: &str = "/video/";
+    pub const IMAGE_PREFIX: &str = "/image/";
 }

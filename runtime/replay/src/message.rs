@@ -119,6 +119,47 @@ impl Frame {
     }
 }
 
+/// A network camera's unit as received (`/video/…`: H.264 Annex B; `/image/…`: one JPEG),
+/// from its JSON message (`foxglove.CompressedVideo` / `foxglove.CompressedImage` with Mocu's
+/// `unit` and `arrival_us`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Unit {
+    /// The camera's path (`frame_id`), e.g. `root.cameras.front`.
+    pub camera: String,
+    /// `h264` or `jpeg`.
+    pub format: String,
+    pub unit: i64,
+    pub arrival_us: i64,
+    pub data: Vec<u8>,
+}
+
+impl Unit {
+    pub fn parse(data: &[u8]) -> Option<Unit> {
+        let j: serde_json::Value = serde_json::from_slice(data).ok()?;
+        let s = |k: &str| j.get(k).and_then(|v| v.as_str());
+        Some(Unit {
+            camera: s("frame_id")?.to_string(),
+            format: s("format")?.to_string(),
+            unit: j.get("unit").and_then(|v| v.as_i64()).unwrap_or(0),
+            arrival_us: j.get("arrival_us").and_then(|v| v.as_i64()).unwrap_or(0),
+            data: crate::value::base64(s("data")?)?,
+        })
+    }
+
+    /// Whether a decoder can start here: a JPEG always; an H.264 unit holding an IDR slice
+    /// or a sequence parameter set (NAL types 5, 7).
+    pub fn is_key(&self) -> bool {
+        if self.format != "h264" {
+            return true;
+        }
+        let d = &self.data;
+        (0..d.len().saturating_sub(3)).any(|i| {
+            let start = d[i] == 0 && d[i + 1] == 0 && d[i + 2] == 1;
+            start && matches!(d[i + 3] & 0x1f, 5 | 7)
+        })
+    }
+}
+
 /// A `/world/values` batch (`mocu_msgs/msg/PropertyValues`, CDR), entry by entry; `None`
 /// when it is malformed.
 pub fn values(data: &[u8]) -> Option<Vec<ValueEntry>> {

@@ -4,11 +4,13 @@
 //! across a seek back).
 
 use crate::file::{RawMessage, Recording, ReplayError};
-use crate::message::{Frame, ObjectChange, PropertyChange, Snapshot, values};
-use crate::topics::{CAMERA_PREFIX, OBJECT, PROPERTY, SNAPSHOT, VALUES};
+use crate::message::{Frame, ObjectChange, PropertyChange, Snapshot, Unit, values};
+use crate::topics::{
+    CAMERA_PREFIX, IMAGE_PREFIX, OBJECT, PROPERTY, SNAPSHOT, VALUES, VIDEO_PREFIX,
+};
 use crate::world::World;
-use mocu_dataserver::{Clock, DataServer, ManualClock, Value};
-use std::collections::{HashMap, VecDeque};
+use mocu_dataserver::{Clock, DataServer, Guid, ManualClock, Value};
+use std::collections::{HashMap, HashSet, VecDeque};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant, UNIX_EPOCH};
@@ -33,6 +35,20 @@ pub struct Player {
     topics: Vec<Arc<str>>,
     /// Frames sent per camera path (the frame number of the next).
     frames: HashMap<String, i64>,
+    /// Attaches a decoder to a network camera (its listener, its `encoded` listener) the
+    /// first time a unit of it is played; the replay's decoders live in the caller.
+    decoder: Option<DecoderHook>,
+    decoded: HashSet<Guid>,
+}
+
+/// What attaches a decoder to a camera: `(server, camera, encoded)`.
+pub type DecoderHook = Box<dyn FnMut(&DataServer, Guid, Guid) + Send>;
+
+/// How far back a seek looks for the key unit a network camera's picture starts from.
+const KEY_LOOKBACK: u64 = 10_000_000_000;
+
+fn is_unit_topic(t: &str) -> bool {
+    t.starts_with(VIDEO_PREFIX) || t.starts_with(IMAGE_PREFIX)
 }
 
 impl Player {
@@ -47,9 +63,13 @@ impl Player {
         let world = World::new(&ds);
         let mut topics: Vec<Arc<str>> = [OBJECT, PROPERTY, VALUES].map(Arc::from).to_vec();
         topics.extend(rec.topics_starting(CAMERA_PREFIX));
+        topics.extend(rec.topics_starting(VIDEO_PREFIX));
+        topics.extend(rec.topics_starting(IMAGE_PREFIX));
         Ok(Player {
             topics,
             frames: HashMap::new(),
+            decoder: None,
+            decoded: HashSet::new(),
             rec,
             world,
             cursor: before,
@@ -172,8 +192,15 @@ impl Player {
         Ok(())
     }
 
+    /// Decodes network cameras' units (`/video/…`, `/image/…`) with what `hook` attaches;
+    /// without one they are not played (their windows stay empty).
+    pub fn set_decoder(&mut self, hook: DecoderHook) {
+        self.decoder = Some(hook);
+    }
+
     /// After a seek: each camera's last frame of the second before `to`, as its window
-    /// showed it then.
+    /// showed it then; a network camera's picture decoded again from the last key unit
+    /// before `to` (within 10 s) up to `to`.
     fn show_last_frames(&mut self, to: u64) -> Result<(), ReplayError> {
         let cameras: Vec<Arc<str>> =
             self.topics.iter().filter(|t| t.starts_with(CAMERA_PREFIX)).cloned().collect();
@@ -184,8 +211,41 @@ impl Player {
                 self.send_frame(&m.data);
             }
         }
+        let units: Vec<Arc<str>> = match self.decoder {
+            Some(_) => self.topics.iter().filter(|t| is_unit_topic(t)).cloned().collect(),
+            None => Vec::new(),
+        };
+        for topic in &units {
+            let from = to.saturating_sub(KEY_LOOKBACK);
+            let msgs = self.rec.messages(from, to, &[&**topic])?;
+            let parsed: Vec<Unit> = msgs.iter().filter_map(|m| Unit::parse(&m.data)).collect();
+            if let Some(key) = parsed.iter().rposition(Unit::is_key) {
+                for u in &parsed[key..] {
+                    self.send_unit(u);
+                }
+            }
+        }
         self.ds.quiesce();
         Ok(())
+    }
+
+    /// Sends a recorded unit on its camera's `encoded` listener, as the receiver sent it,
+    /// a decoder attached to the camera first.
+    fn send_unit(&mut self, u: &Unit) {
+        let Some(hook) = self.decoder.as_mut() else { return };
+        let path: Vec<&str> = u.camera.split('.').skip(1).collect();
+        let Some(camera) = self.ds.resolve(&path) else { return };
+        let Some(encoded) = self.ds.find_child(camera, "encoded").ok().flatten() else { return };
+        if self.decoded.insert(camera) {
+            hook(&self.ds, camera, encoded);
+        }
+        let msg = vec![
+            Value::Bytes(u.data.clone().into()),
+            Value::str(&u.format),
+            Value::Int(u.unit),
+            Value::Int(u.arrival_us),
+        ];
+        let _ = self.ds.send(encoded, msg);
     }
 
     /// Sends a recorded frame on its camera's listener: `[pixels, width, height, frame]`,
@@ -280,6 +340,11 @@ impl Player {
                 }
             }
             t if t.starts_with(CAMERA_PREFIX) => self.send_frame(&m.data),
+            t if is_unit_topic(t) => {
+                if let Some(u) = Unit::parse(&m.data) {
+                    self.send_unit(&u);
+                }
+            }
             _ => {}
         }
     }

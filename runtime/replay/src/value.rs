@@ -43,7 +43,7 @@ fn elements(a: &[Json]) -> Option<Vec<Value>> {
 }
 
 /// Standard, padded base64.
-fn base64(s: &str) -> Option<Vec<u8>> {
+pub(crate) fn base64(s: &str) -> Option<Vec<u8>> {
     let digit = |c: u8| -> Option<u32> {
         Some(match c {
             b'A'..=b'Z' => c - b'A',

@@ -198,6 +198,8 @@ struct DecodeState {
     /// Units that gave no picture (parameter sets only, or the decoder waiting for a key
     /// frame).
     no_picture: i64,
+    /// Decoding a replay: pictures only; the camera's statistics are the recording's.
+    replayed: bool,
 }
 
 /// Frames per second over windows of about 250 ms, and when to publish statistics.
@@ -242,6 +244,28 @@ pub fn attach_decoder(
     camera: Guid,
     encoded: Guid,
 ) -> Result<DecoderHandle, DsError> {
+    attach(ds, executor, camera, encoded, false)
+}
+
+/// [`attach_decoder`] for a replay (`mocu replay`): the recorded units decoded into pictures
+/// on `camera`, nothing else written (the camera's statistics are replayed as recorded, and
+/// nothing here reads the system's clock: the same recording gives the same pictures).
+pub fn attach_replay_decoder(
+    ds: &DataServer,
+    executor: &Executor,
+    camera: Guid,
+    encoded: Guid,
+) -> Result<DecoderHandle, DsError> {
+    attach(ds, executor, camera, encoded, true)
+}
+
+fn attach(
+    ds: &DataServer,
+    executor: &Executor,
+    camera: Guid,
+    encoded: Guid,
+    replayed: bool,
+) -> Result<DecoderHandle, DsError> {
     if let Some(old) = ds.find_child(camera, "decoder")? {
         ds.delete_object(old)?;
     }
@@ -260,6 +284,7 @@ pub fn attach_decoder(
         dropped_queue: 0,
         refused: 0,
         no_picture: 0,
+        replayed,
     }));
     let spec = MethodSpec::new("unit")
         .param(ParamSpec::new("data", ValueKind::Bytes))
@@ -307,9 +332,14 @@ fn on_unit(ds: &DataServer, camera: Guid, state: &Mutex<DecodeState>, u: &Encode
                 width: w,
                 height: h,
                 frame: st.frames,
-                arrival_us: Some(u.arrival_us),
+                // A replay's frames arrived in another process, on another clock: their
+                // latency is not this one's to show.
+                arrival_us: (!st.replayed).then_some(u.arrival_us),
             };
             let _ = ds.send(camera, msg.to_values());
+            if st.replayed {
+                return;
+            }
             let now = now_us();
             st.last_latency_ms = (now - u.arrival_us) as f64 / 1000.0;
             st.last_frame_us = now;
@@ -323,6 +353,9 @@ fn on_unit(ds: &DataServer, camera: Guid, state: &Mutex<DecodeState>, u: &Encode
         // The last good frame stays on screen: nothing is sent.
         Err(DecodeError::Refused { .. }) => st.refused += 1,
         Err(DecodeError::Failed(_)) => st.errors += 1,
+    }
+    if st.replayed {
+        return;
     }
     // Counters on every unit (they add up: see docs/video.md; the receiver sums `dropped`),
     // rates once a period.

@@ -53,7 +53,9 @@ pub mod stream;
 pub mod window;
 
 pub use clock::now_us;
-pub use codec::{Codec, CodecModule, DecodeError, DecodedFrame, Decoder, attach_decoder};
+pub use codec::{
+    Codec, CodecModule, DecodeError, DecodedFrame, Decoder, attach_decoder, attach_replay_decoder,
+};
 pub use frame::{EncodedUnit, FrameMsg};
 pub use limits::{DEFAULT_LIMITS, Limits};
 pub use receiver::{DEFAULT_ADDRESS, MAX_DATAGRAM, ReceiverConfig, VideoReceiver};

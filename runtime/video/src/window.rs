@@ -360,6 +360,9 @@ impl Shared {
         if timed {
             spec = spec.param(ParamSpec::any("arrival_us"));
         }
+        // Frames with or without their arrival time (a replay's decoder leaves it out: it
+        // was taken on the recording process's clock), whatever the camera said before.
+        let spec = spec.any_args();
         let method = spec.name.to_string();
         let weak = Arc::downgrade(self);
         let ok = ds.publish_method_on(&self.exec, receiver, spec, move |call: Call| {
