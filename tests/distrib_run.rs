@@ -58,6 +58,16 @@ impl Proc {
         Proc::start(&["serve", "--listen", &ep, "--mavlink", "off", "--video", "off"])
     }
 
+    /// An adapter serving `profile` on `port`, no MAVLink or video sockets, with `extra`
+    /// arguments.
+    fn serve_profile(profile: &str, port: u16, extra: &[&str]) -> Proc {
+        let ep = endpoint(port);
+        let mut args =
+            vec!["serve", profile, "--listen", &ep, "--mavlink", "off", "--video", "off"];
+        args.extend_from_slice(extra);
+        Proc::start(&args)
+    }
+
     /// Waits until a line printed after the first `from` lines satisfies `pred`; returns
     /// how many lines there are then.
     fn wait_line(&self, from: usize, what: &str, pred: impl Fn(&str) -> bool) -> usize {
@@ -283,17 +293,7 @@ fn control_ocu(port: u16, operator: &str, script: &str) -> Proc {
 fn a_non_holders_command_is_refused_takeovers_follow_each_vehicles_policy_and_a_killed_holder_is_released()
  {
     let port = free_port();
-    let ep = endpoint(port);
-    let adapter = Proc::start(&[
-        "serve",
-        "tests/distrib/adapter.toml",
-        "--listen",
-        &ep,
-        "--mavlink",
-        "off",
-        "--video",
-        "off",
-    ]);
+    let adapter = Proc::serve_profile("tests/distrib/adapter.toml", port, &[]);
     adapter.wait_line(0, "usv1 and usv2", |l| l.contains("vehicles: usv1, usv2"));
     // alice requests both vehicles; the adapter says who holds them.
     let alice = control_ocu(port, "alice", "tests/distrib/alice.script");
@@ -389,16 +389,7 @@ fn a_python_process_module_stops_a_vehicle_leaving_its_zone_and_is_restarted_aft
 fn an_ocu_shows_the_camera_an_adapter_shares_in_its_video_window() {
     let port = free_port();
     let ep = endpoint(port);
-    let adapter = Proc::start(&[
-        "serve",
-        "tests/distrib/streams.toml",
-        "--listen",
-        &ep,
-        "--mavlink",
-        "off",
-        "--video",
-        "off",
-    ]);
+    let adapter = Proc::serve_profile("tests/distrib/streams.toml", port, &[]);
     adapter.wait_line(0, "usv1", |l| l.contains("vehicles: ") && l.contains("usv1"));
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("ocu.png");
@@ -417,7 +408,7 @@ fn an_ocu_shows_the_camera_an_adapter_shares_in_its_video_window() {
         "--connect",
         &ep,
         "--frames",
-        "180",
+        "300",
         "--size",
         "640x400",
         "--screenshot",
@@ -439,18 +430,8 @@ fn an_adapter_records_its_world_model_and_replay_shows_it() {
     let port = free_port();
     let dir = tempfile::tempdir().unwrap();
     let trial = dir.path().join("adapter.mcap");
-    let adapter = Proc::start(&[
-        "serve",
-        "tests/distrib/streams.toml",
-        "--listen",
-        &endpoint(port),
-        "--mavlink",
-        "off",
-        "--video",
-        "off",
-        "--record",
-        trial.to_str().unwrap(),
-    ]);
+    let record = ["--record", trial.to_str().unwrap()];
+    let adapter = Proc::serve_profile("tests/distrib/streams.toml", port, &record);
     // The summary is looked at once a second: by its line naming both USVs, the simulator
     // has run for a second at least.
     adapter.wait_line(0, "usv1 and usv2", |l| l.contains("vehicles: usv1, usv2"));

@@ -108,37 +108,7 @@ impl Link {
                 .describe("Take control for an operator: asked of the vehicle where it speaks the GCS operator-control protocol"),
             move |c: Call| {
                 let op = c.args[0].as_str().unwrap_or("").to_string();
-                let mut st = me.inner.state.lock();
-                let Some(sys) = st.by_guid.get(&c.object).copied() else {
-                    drop(st);
-                    c.responder.reply(CallOutcome::NoSuchObject);
-                    return;
-                };
-                let v = st.vehicles.get_mut(&sys).expect("by_guid and vehicles agree");
-                if op.is_empty() {
-                    drop(st);
-                    c.responder.refuse("an operator name is needed");
-                    return;
-                }
-                if v.gcs.is_some() {
-                    // The vehicle decides (MAV_CMD_REQUEST_OPERATOR_CONTROL): control for this
-                    // adapter's system id, others asked before they take it over.
-                    v.requester = op;
-                    drop(st);
-                    let ours = f32::from(me.inner.cfg.system_id);
-                    let cmd = MavCmd::MAV_CMD_REQUEST_OPERATOR_CONTROL;
-                    me.command(c, "request_control", cmd, [1.0, 0.0, 10.0, ours, 0.0, 0.0, 0.0]);
-                    return;
-                }
-                let outcome = if !v.control.is_empty() && v.control != op {
-                    CallOutcome::Refused(format!("control held by {}", v.control))
-                } else {
-                    v.control = op.clone();
-                    let _ = me.inner.ctx.ds.set(v.guid, "control", Value::str(&op));
-                    CallOutcome::Accepted(vec![])
-                };
-                drop(st);
-                c.responder.reply(outcome);
+                me.operator_control(c, Some(op));
             },
         )?;
         let me = self.clone();
@@ -147,27 +117,60 @@ impl Link {
             guid,
             MethodSpec::new("release_control")
                 .describe("Give control back (to the vehicle, where it speaks the GCS operator-control protocol)"),
-            move |c: Call| {
-                let mut st = me.inner.state.lock();
-                let Some(sys) = st.by_guid.get(&c.object).copied() else {
-                    drop(st);
-                    c.responder.reply(CallOutcome::NoSuchObject);
-                    return;
-                };
-                let v = st.vehicles.get_mut(&sys).expect("by_guid and vehicles agree");
-                if v.gcs.is_some() {
-                    drop(st);
-                    let ours = f32::from(me.inner.cfg.system_id);
-                    let cmd = MavCmd::MAV_CMD_REQUEST_OPERATOR_CONTROL;
-                    me.command(c, "release_control", cmd, [0.0, 0.0, 10.0, ours, 0.0, 0.0, 0.0]);
-                    return;
-                }
-                v.control.clear();
-                let _ = me.inner.ctx.ds.set(v.guid, "control", Value::str(""));
-                drop(st);
-                c.responder.reply(CallOutcome::Accepted(vec![]));
-            },
+            move |c: Call| me.operator_control(c, None),
         )?;
         Ok(())
+    }
+}
+
+impl Link {
+    /// `request_control(operator)` (`Some`) or `release_control()` (`None`): asked of the
+    /// vehicle where it speaks MAVLink's GCS operator-control protocol
+    /// (MAV_CMD_REQUEST_OPERATOR_CONTROL for this adapter's system id, takeovers by others
+    /// asked of it), kept by this module otherwise.
+    fn operator_control(&self, c: Call, op: Option<String>) {
+        let mut st = self.inner.state.lock();
+        let Some(sys) = st.by_guid.get(&c.object).copied() else {
+            drop(st);
+            c.responder.reply(CallOutcome::NoSuchObject);
+            return;
+        };
+        let v = st.vehicles.get_mut(&sys).expect("by_guid and vehicles agree");
+        if op.as_deref() == Some("") {
+            drop(st);
+            c.responder.refuse("an operator name is needed");
+            return;
+        }
+        if v.gcs.is_some() {
+            let (label, action) = match op {
+                Some(op) => {
+                    v.requester = op;
+                    ("request_control", 1.0)
+                }
+                None => ("release_control", 0.0),
+            };
+            drop(st);
+            let ours = f32::from(self.inner.cfg.system_id);
+            let cmd = MavCmd::MAV_CMD_REQUEST_OPERATOR_CONTROL;
+            self.command(c, label, cmd, [action, 0.0, 10.0, ours, 0.0, 0.0, 0.0]);
+            return;
+        }
+        let outcome = match op {
+            Some(op) if !v.control.is_empty() && v.control != op => {
+                CallOutcome::Refused(format!("control held by {}", v.control))
+            }
+            Some(op) => {
+                let _ = self.inner.ctx.ds.set(v.guid, "control", Value::str(&op));
+                v.control = op;
+                CallOutcome::Accepted(vec![])
+            }
+            None => {
+                v.control.clear();
+                let _ = self.inner.ctx.ds.set(v.guid, "control", Value::str(""));
+                CallOutcome::Accepted(vec![])
+            }
+        };
+        drop(st);
+        c.responder.reply(outcome);
     }
 }
