@@ -439,3 +439,43 @@ fn a_screenshot_is_a_png_of_the_last_frame() {
     assert_eq!((back.width(), back.height()), (64, 32));
     assert_eq!(pixel(&back, 3, 3), [200, 100, 50, 255]);
 }
+
+/// Every painter that takes pointer input sees a window's events in the order the window
+/// manager sent them, whoever publishes the method and however (the spec is ordered: the
+/// DataServer gives a handler published without an executor one of its own).
+#[test]
+fn pointer_events_reach_every_painter_in_the_order_they_were_sent() {
+    assert!(pointer_spec().ordered, "pointer_spec() must stay an ordered spec");
+    let (ds, mut d) = world(640, 400);
+    let (map, _hud) = two_modules(&ds, &d);
+    let seen = Arc::new(parking_lot::Mutex::new(Vec::new()));
+    let s2 = seen.clone();
+    // The first press is slow to handle (it waits until every event is sent): on the bare
+    // pool the others would overtake it.
+    let (go, wait) = std::sync::mpsc::sync_channel::<()>(1);
+    let wait = parking_lot::Mutex::new(Some(wait));
+    // Published the plain way, on the pool, as a hurried painter would.
+    ds.publish_method_fn(map, pointer_spec(), move |args| {
+        let kind = args[0].as_str().unwrap().to_string();
+        if kind == "down"
+            && let Some(w) = wait.lock().take()
+        {
+            let _ = w.recv();
+        }
+        s2.lock().push(kind);
+        CallOutcome::Accepted(vec![])
+    })
+    .unwrap();
+    frame(&ds, &mut d);
+    for _ in 0..50 {
+        d.pointer(320.0, 300.0, PointerEvent::Down(0));
+        d.pointer(330.0, 300.0, PointerEvent::Move);
+        d.pointer(330.0, 300.0, PointerEvent::Up(0));
+    }
+    go.send(()).unwrap();
+    ds.quiesce();
+    let got: Vec<String> = seen.lock().iter().filter(|k| *k != "enter").cloned().collect();
+    let want: Vec<String> =
+        (0..50).flat_map(|_| ["down", "move", "up"]).map(String::from).collect();
+    assert_eq!(got, want);
+}
