@@ -332,3 +332,8 @@ impl SerialInner {
 pub(crate) fn wait_quiet(pool: &Pool) {
     pool.inflight.wait_zero();
 }
+
+/// Whether nothing is pending or running on the pool now.
+pub(crate) fn is_quiet(pool: &Pool) -> bool {
+    pool.inflight.count.load(Ordering::Acquire) == 0
+}

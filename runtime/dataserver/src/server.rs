@@ -487,7 +487,15 @@ impl DataServer {
     /// Waits until no notification or queued call is pending or running (delayed calls
     /// that are not yet due do not count). For tests and orderly shutdown.
     pub fn quiesce(&self) {
-        crate::executor::wait_quiet(&self.inner.pool);
+        // A due job the timer thread has taken but not yet submitted is in neither count:
+        // wait until the pool is idle with no job in the timer's hands.
+        loop {
+            crate::executor::wait_quiet(&self.inner.pool);
+            if self.inner.timer.firing() == 0 && crate::executor::is_quiet(&self.inner.pool) {
+                return;
+            }
+            std::thread::yield_now();
+        }
     }
 
     /// Moves `clock` (this server's clock) forward to `to` one timer job at a time: the jobs

@@ -57,6 +57,10 @@ struct TimerShared {
     /// While set (a manual clock stepped by `DataServer::advance_settled`), only the
     /// stepping thread fires jobs, one at a time.
     held: std::sync::atomic::AtomicBool,
+    /// Jobs taken off the schedule and not yet handed to their executor (or still running
+    /// inline): `DataServer::quiesce` waits for them too, or a job the timer thread had
+    /// just taken could land after a quiesce that found the pool idle.
+    firing: AtomicUsize,
 }
 
 #[derive(Default)]
@@ -76,6 +80,7 @@ impl Timer {
             stats,
             manual: false.into(),
             held: false.into(),
+            firing: AtomicUsize::new(0),
         });
         let weak = Arc::downgrade(&shared);
         let fire: Arc<dyn Fn() + Send + Sync> = Arc::new(move || {
@@ -154,6 +159,11 @@ impl Timer {
     pub(crate) fn pending(&self) -> usize {
         self.shared.pending.load(Ordering::Relaxed)
     }
+
+    /// Jobs being handed over or run inline right now.
+    pub(crate) fn firing(&self) -> usize {
+        self.shared.firing.load(Ordering::SeqCst)
+    }
 }
 
 impl TimerShared {
@@ -167,6 +177,9 @@ impl TimerShared {
         }
         let entry = st.jobs.remove(&(due, id));
         self.pending.fetch_sub(1, Ordering::Relaxed);
+        // Counted before the lock is released: nobody sees the job neither scheduled nor
+        // firing.
+        self.firing.fetch_add(1, Ordering::SeqCst);
         entry
     }
 
@@ -191,6 +204,7 @@ impl TimerShared {
             }
             Fire::Submit(target) => target.submit(job),
         }
+        self.firing.fetch_sub(1, Ordering::SeqCst);
         true
     }
 
