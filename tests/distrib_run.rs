@@ -110,28 +110,18 @@ fn wait_vehicles(adapter: &Proc) {
     });
 }
 
+/// A headless OCU on `layout` with no vehicles or sockets of its own, joined to the adapter.
+fn joined_run(layout: &str, port: u16) -> Vec<String> {
+    let ep = endpoint(port);
+    let args = ["run", layout, "--no-sim", "--mavlink", "off", "--video", "off"];
+    let rest = ["--headless", "--no-watch", "--connect", &ep];
+    args.iter().chain(&rest).map(|s| s.to_string()).collect()
+}
+
 /// An OCU on fig3 against the adapter, headless for `frames` frames, dumping root.vehicles.
 fn ocu_args(port: u16, operator: &str, frames: Option<&str>) -> Vec<String> {
-    let mut a: Vec<String> = [
-        "run",
-        "layouts/fig3-multi-usv.mocu",
-        "--no-sim",
-        "--mavlink",
-        "off",
-        "--video",
-        "off",
-        "--headless",
-        "--no-watch",
-        "--connect",
-        &endpoint(port),
-        "--operator",
-        operator,
-        "--dump",
-        "root.vehicles",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
+    let mut a = joined_run("layouts/fig3-multi-usv.mocu", port);
+    a.extend(["--operator", operator, "--dump", "root.vehicles"].map(String::from));
     if let Some(n) = frames {
         a.extend(["--frames".to_string(), n.to_string()]);
     }
@@ -388,32 +378,16 @@ fn a_python_process_module_stops_a_vehicle_leaving_its_zone_and_is_restarted_aft
 #[test]
 fn an_ocu_shows_the_camera_an_adapter_shares_in_its_video_window() {
     let port = free_port();
-    let ep = endpoint(port);
     let adapter = Proc::serve_profile("tests/distrib/streams.toml", port, &[]);
     adapter.wait_line(0, "usv1", |l| l.contains("vehicles: ") && l.contains("usv1"));
     let dir = tempfile::tempdir().unwrap();
     let shot = dir.path().join("ocu.png");
     // layouts/usv.mocu shows usv1's drive camera full screen: the adapter's simulator renders
     // it (someone listens: the share), the OCU has no simulator of its own.
-    let ocu = Proc::start(&[
-        "run",
-        "layouts/usv.mocu",
-        "--no-sim",
-        "--mavlink",
-        "off",
-        "--video",
-        "off",
-        "--headless",
-        "--no-watch",
-        "--connect",
-        &ep,
-        "--frames",
-        "300",
-        "--size",
-        "640x400",
-        "--screenshot",
-        shot.to_str().unwrap(),
-    ]);
+    let mut args = joined_run("layouts/usv.mocu", port);
+    args.extend(["--frames", "300", "--size", "640x400", "--screenshot"].map(String::from));
+    args.push(shot.to_str().unwrap().to_string());
+    let ocu = Proc::start(&args.iter().map(String::as_str).collect::<Vec<_>>());
     let (out, lines) = ocu.finish();
     assert!(out.status.success(), "the OCU failed:\n{}", lines.join("\n"));
     // The upper right of the screen, clear of the HUD (as in tests/replay.rs).

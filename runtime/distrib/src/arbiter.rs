@@ -282,7 +282,7 @@ impl Arbiter {
         limit: Option<Duration>,
         reply: Reply,
     ) {
-        if let Some(ask) = self.ask_vehicle_first(vehicle, method, &caller) {
+        if let Some(ask) = self.ask_vehicle_first(vehicle, method) {
             // The vehicle decides first (MAVLink's operator-control protocol); then the rules
             // here choose among this site's operators as for any vehicle.
             let (me, vehicle, method, args) =
@@ -308,10 +308,10 @@ impl Arbiter {
         self.give_back_if_free(vehicle);
     }
 
-    /// The vehicle to ask first for `method` by `caller`: a request or a takeover of a
+    /// The vehicle to ask first for `method`: a request or a takeover of a
     /// vehicle that speaks MAVLink's operator-control protocol while no operator of this site
     /// holds it (once one does, the vehicle's control is this site's already).
-    fn ask_vehicle_first(&self, vehicle: &str, method: &str, _caller: &Caller) -> Option<Guid> {
+    fn ask_vehicle_first(&self, vehicle: &str, method: &str) -> Option<Guid> {
         if !matches!(method, "request" | "takeover") {
             return None;
         }
