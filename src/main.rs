@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 mod build;
 mod check;
+mod core_modules;
 mod fmt;
 mod frames;
 mod golden;
@@ -48,6 +49,8 @@ enum Command {
 
 fn main() -> ExitCode {
     logger::init();
+    // Script actions in layouts are checked by the engines `mocu run` has.
+    mocu_layout::install_script_checker();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

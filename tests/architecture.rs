@@ -40,9 +40,21 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("mocu-display", &["mocu-value", "mocu-dataserver"]),
     // Video: a module and the video window's painter (sees only the display's Canvas).
     ("mocu-video", &["mocu-value", "mocu-dataserver", "mocu-host", "mocu-display"]),
-    // A layout reaches the rest of the OCU only through the DataServer.
-    ("mocu-layout", &["mocu-value", "mocu-dataserver", "mocu-language", "mocu-jit", "mocu-lower"]),
+    // A layout reaches the rest of the OCU only through the DataServer (its script actions
+    // too: the engines see the DataServer's API only).
+    (
+        "mocu-layout",
+        &[
+            "mocu-value",
+            "mocu-dataserver",
+            "mocu-language",
+            "mocu-jit",
+            "mocu-lower",
+            "mocu-script",
+        ],
+    ),
     // The widget renderer reads the display from root.display; never talks to a layout.
+    // Its `widgets` and `map_view` are module kinds like the others (the module host).
     (
         "mocu-widgets",
         &[
@@ -52,6 +64,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "mocu-jit",
             "mocu-lower",
             "mocu-display",
+            "mocu-host",
         ],
     ),
     (

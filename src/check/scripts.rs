@@ -2,6 +2,7 @@
 //! file is parsed by its engine, without running, and its syntax error reported as E0101 at
 //! the script's own line and column (docs/scripting.md).
 
+use mocu_language::passes::check_scripts::offset_of;
 use mocu_language::{Diagnostics, SourceMap, Span, codes};
 use mocu_script::{Registry, Source};
 use std::path::Path;
@@ -53,13 +54,4 @@ fn setting_span(profile: &str, text: &str, file: &str, sources: &mut SourceMap) 
     let end = start + if start == 0 { 0 } else { quoted.len() as u32 };
     let id = sources.add(profile.to_string(), text.to_string());
     Span { file: id, start, end }
-}
-
-/// The byte offset of a 1-based line and column (in characters).
-fn offset_of(text: &str, line: u32, col: u32) -> u32 {
-    let line_start: usize =
-        text.split_inclusive('\n').take(line.saturating_sub(1) as usize).map(str::len).sum();
-    let rest = &text[line_start.min(text.len())..];
-    let within: usize = rest.chars().take(col.saturating_sub(1) as usize).map(char::len_utf8).sum();
-    (line_start + within) as u32
 }

@@ -256,6 +256,13 @@ pub enum ActionKind {
     Select {
         target: SelectTarget,
     },
+    /// `#js: { … }`: a script for the engine `engine` names (`js`, its span the prefix's);
+    /// `body` is the text between the braces, `body_span` where it is.
+    Script {
+        engine: Ident,
+        body: String,
+        body_span: Span,
+    },
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -101,7 +101,8 @@ impl ItemCache {
         diags: &mut Diagnostics,
     ) -> Program {
         let modules = self.load_sources(path, text, loader, sources, diags);
-        let program = crate::compile_modules(&modules, schema, config, diags);
+        let mut program = crate::compile_modules(&modules, schema, config, diags);
+        crate::locate_scripts(&mut program, sources);
         self.recycle(modules, sources);
         program
     }
@@ -508,6 +509,10 @@ impl Shift for Action {
                 SelectTarget::Next | SelectTarget::Prev => {}
                 SelectTarget::Object(e) => e.shift(d, f),
             },
+            ActionKind::Script { engine, body: _, body_span } => {
+                engine.shift(d, f);
+                body_span.shift(d, f);
+            }
         }
     }
 }

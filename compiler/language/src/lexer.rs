@@ -5,12 +5,16 @@
 //!   outside strings and comments (E0105), naming the character to type instead;
 //! - brackets nested deeper than [`MAX_NESTING`] (E0106), at the first opening past the limit.
 //!
+//! A script action's body (`#js: { … }`) is skipped whole ([`crate::script_text`]): its text is
+//! the engine's; only a body, string or comment in it left open is reported (E0104).
+//!
 //! pest and the later passes recurse on nesting, so nothing deeper than the limit ever reaches
 //! them. The byte ranges it returns are broken: the parser skips the items that overlap them
 //! instead of reporting follow-on errors. A UTF-8 byte order mark is skipped.
 
 use crate::codes;
 use crate::diagnostics::Diagnostics;
+use crate::script_text;
 use crate::source::{FileId, SourceMap, Span};
 use std::ops::Range;
 
@@ -159,6 +163,27 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
                 i += 2;
                 continue;
             }
+            // `#js: { … }`: a script's body is the engine's text, skipped whole (its strings,
+            // comments and quotes are the engine's); a colour is not a script.
+            b'#' if let Some(open) = script_text::body_open(bytes, i) => {
+                match script_text::body_end(bytes, open) {
+                    Ok(end) => i = end,
+                    Err(at) => {
+                        let (what, label) = if at == open {
+                            ("this script's `{` is never closed", "unclosed script")
+                        } else {
+                            ("this string or comment in a script is never closed", "unclosed")
+                        };
+                        diags
+                            .error(codes::UNCLOSED_TEXT, Span::new(file, at, at + 1), what)
+                            .label(label)
+                            .help("a script's body runs from its `{` to the `}` that balances it; braces in the script's strings and comments do not count");
+                        out.broken.push(i..bytes.len());
+                        i = bytes.len();
+                    }
+                }
+                continue;
+            }
             b'"' => {
                 let refused =
                     push(&mut stack, Frame::Str(i), file, i, diags, &mut too_deep_reported);
@@ -276,7 +301,7 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
 }
 
 /// Bytes that [`scan`] passes over outside strings, and inside them.
-static PLAIN_CODE: [bool; 256] = plain_bytes(b"/\"([{)]}\n'", true);
+static PLAIN_CODE: [bool; 256] = plain_bytes(b"/\"([{)]}\n'#", true);
 static PLAIN_TEXT: [bool; 256] = plain_bytes(b"\"\\{}\n", false);
 
 const fn plain_bytes(special: &[u8], non_ascii_special: bool) -> [bool; 256] {

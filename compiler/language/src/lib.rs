@@ -34,6 +34,7 @@ pub mod program;
 pub mod project;
 pub mod render;
 pub mod schema;
+pub mod script_text;
 pub mod source;
 pub mod syntax_hints;
 pub mod types;
@@ -81,7 +82,25 @@ pub fn compile_layout(
 ) -> Program {
     // 1. Parse the file and everything it uses: later passes need all trees.
     let modules = load_sources::load_sources(path, text, loader, sources, diags);
-    compile_modules(&modules, schema, config, diags)
+    let mut program = compile_modules(&modules, schema, config, diags);
+    locate_scripts(&mut program, sources);
+    program
+}
+
+/// Script bodies learn where they are in their files, for the runtime's errors (the passes
+/// see spans only).
+pub fn locate_scripts(program: &mut Program, sources: &SourceMap) {
+    for a in program.actions_mut() {
+        if let program::Action::Script { span, origin, .. } = a {
+            let f = sources.get(span.file);
+            let lc = f.line_col(span.start as usize);
+            *origin = Some(program::ScriptOrigin {
+                file: f.path.clone(),
+                line: lc.line as u32,
+                col: lc.column as u32,
+            });
+        }
+    }
 }
 
 /// The passes of [`compile_layout`] after parsing, over files already parsed (module 0 is the

@@ -46,6 +46,8 @@ pub(crate) enum CompiledAction {
     Select(Select),
     /// Acknowledge every alert (the runtime's own Escape / `select` bindings).
     Acknowledge,
+    /// `#js: { … }`: see `scripts.rs`.
+    Script(Arc<crate::scripts::ScriptAction>),
 }
 
 #[derive(Clone, Debug)]
@@ -111,6 +113,9 @@ pub(crate) fn compile_actions(
                 CompiledAction::Alert { level: level.clone(), func: b.add(lw, vec![e]) }
             }
             Action::Mode { mode, .. } => CompiledAction::Mode(mode.clone()),
+            Action::Script { engine, body, origin, .. } => CompiledAction::Script(
+                crate::scripts::ScriptAction::new(engine, body, origin.as_ref()),
+            ),
             Action::Select { target, .. } => CompiledAction::Select(match target {
                 SelectTarget::Next => Select::Next,
                 SelectTarget::Prev => Select::Prev,
@@ -334,6 +339,7 @@ pub(crate) fn run_actions(
             }
             CompiledAction::Select(target) => select(sh, target, cx),
             CompiledAction::Acknowledge => crate::alerts::acknowledge(sh, cx),
+            CompiledAction::Script(s) => s.run(sh, cx),
             CompiledAction::Alert { level, func } => {
                 let text = eval_once(sh, func, cx.instance_object, cx.self_obj, cx.input)
                     .remove(0)

@@ -91,6 +91,8 @@ pub struct Layout {
 pub(crate) struct Shared {
     pub(crate) ds: DataServer,
     pub(crate) exec: Executor,
+    /// Where the layout's script actions run (`scripts.rs`): serial, apart from evaluation.
+    pub(crate) scripts: Executor,
     pub(crate) sink: Arc<dyn EventSink>,
     pub(crate) config: LayoutConfig,
     pub(crate) state: Mutex<State>,
@@ -220,6 +222,7 @@ impl Layout {
         let shared = Arc::new(Shared {
             ds: ds.clone(),
             exec: ds.serial_executor(),
+            scripts: ds.serial_executor(),
             sink,
             config,
             state: Mutex::new(State {

@@ -31,6 +31,7 @@ fn describe_one(a: &CompiledAction) -> String {
             format!("select {}", object(base, objects))
         }
         CompiledAction::Acknowledge => "acknowledge alerts".into(),
+        CompiledAction::Script(s) => s.describe(),
     }
 }
 

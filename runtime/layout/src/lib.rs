@@ -7,6 +7,7 @@
 //! - `stale`: each widget's `stale` output, from the link state of the vehicles it reads.
 //! - `watch`: watches on delayed calls (hold, hysteresis, repeat, snooze).
 //! - `actions`: set / call / swap / show / hide / alert, with control feedback.
+//! - `scripts`: script actions (`#js: { … }`, `#rhai: { … }`) on the layout's script executor.
 //! - `alerts`: alerts and failed commands always reach the operator (world model, log,
 //!   terminal, and a built-in alert window unless the layout places an `AlertLayer`).
 //! - `clock`: `root.operator.clock` (`utc`, `time`) on the DataServer's clock, while the
@@ -29,9 +30,11 @@ pub use mocu_lower as lower;
 use mocu_lower::convert;
 mod menu;
 mod reload;
+mod scripts;
 mod stale;
 mod watch;
 
 pub use events::{EventSink, JsonlLog, MemorySink, NullSink};
 pub use graph::{Layout, LayoutConfig, LayoutStats, LoadError};
 pub use reload::ReloadStats;
+pub use scripts::install_script_checker;

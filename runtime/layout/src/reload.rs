@@ -71,15 +71,19 @@ fn items(program: &Program) -> Vec<(ItemKey, String, Def<'_>)> {
     // edge changes with the window.
     let design = format!("{:?}", program.design);
     for w in &program.windows {
-        out.push((ItemKey::Window(w.name.clone()), design.clone() + &canon(w), Def::Window(w)));
+        out.push((
+            ItemKey::Window(w.name.clone()),
+            design.clone() + canon(w).as_str(),
+            Def::Window(w),
+        ));
     }
     for (i, w) in program.widgets.iter().enumerate() {
         let name = w.name.clone().unwrap_or_else(|| format!("{}#{i}", w.component));
-        let mut text = design.clone() + &canon(w);
+        let mut text = design.clone() + canon(w).as_str();
         if !w.anchor.is_default()
             && let Some(win) = program.windows.iter().find(|x| x.name == w.window)
         {
-            text += &canon(&win.rect);
+            text += canon(&win.rect).as_str();
         }
         out.push((ItemKey::Widget(w.window.clone(), name), text, Def::Widget(i, w)));
     }
@@ -88,7 +92,7 @@ fn items(program: &Program) -> Vec<(ItemKey, String, Def<'_>)> {
     }
     for t in &program.templates {
         let key = format!("{}@{}", t.var, t.source);
-        out.push((ItemKey::Template(key), design.clone() + &canon(t), Def::Template(t)));
+        out.push((ItemKey::Template(key), design.clone() + canon(t).as_str(), Def::Template(t)));
     }
     out.push((ItemKey::Bindings, canon(&program.bindings), Def::Bindings));
     out

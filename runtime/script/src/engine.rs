@@ -47,6 +47,9 @@ pub trait Engine: Send + Sync {
 pub trait Instance: Send {
     /// Runs the script's text (a module's top level once; an action's body on each event).
     fn run(&mut self) -> Result<(), ScriptError>;
+    /// Runs the script's text with these variables set (a layout action's `self`, `selected`,
+    /// `input`; `None` is absent: `undefined` / `()`).
+    fn run_with(&mut self, vars: &[(&str, Option<Value>)]) -> Result<(), ScriptError>;
     /// Calls a callback the script handed to the API; `None` arguments are absent values.
     /// A `once` callback is forgotten after it ran.
     fn invoke(

@@ -157,6 +157,18 @@ impl Instance for JsInstance {
         self.call(0, &[], false)
     }
 
+    fn run_with(&mut self, vars: &[(&str, Option<Value>)]) -> Result<(), ScriptError> {
+        self.ctx
+            .with(|ctx| {
+                for (name, v) in vars {
+                    ctx.globals().set(*name, to_js(&ctx, v.as_ref())?)?;
+                }
+                Ok::<_, rquickjs::Error>(())
+            })
+            .map_err(|e| setup(&self.source, e))?;
+        self.call(0, &[], false)
+    }
+
     fn invoke(
         &mut self,
         callback: CallbackId,

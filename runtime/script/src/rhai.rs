@@ -86,7 +86,14 @@ struct RhaiInstance {
 
 impl Instance for RhaiInstance {
     fn run(&mut self) -> Result<(), ScriptError> {
+        self.run_with(&[])
+    }
+
+    fn run_with(&mut self, vars: &[(&str, Option<Value>)]) -> Result<(), ScriptError> {
         let mut scope = Scope::new();
+        for (name, v) in vars {
+            scope.push_constant(*name, v.as_ref().map_or(Dynamic::UNIT, to_dynamic));
+        }
         self.engine.run_ast_with_scope(&mut scope, &self.ast).map_err(|e| runtime(&self.source, &e))
     }
 

@@ -325,7 +325,7 @@ impl Index {
                 self.refer(m, window.span.start, window.span.end, def);
             }
             ActionKind::Alert { message, .. } => self.expr(message, scope),
-            ActionKind::Mode { .. } => {}
+            ActionKind::Mode { .. } | ActionKind::Script { .. } => {}
             ActionKind::Select { target } => {
                 if let SelectTarget::Object(e) = target {
                     self.expr(e, scope);

@@ -124,10 +124,13 @@ impl std::fmt::Write for SpanlessHasher {
 /// A `{:?}` dump with every [`crate::Span`] in it replaced by `_`: what two trees or programs
 /// that differ only in where things were written have in common.
 pub fn without_spans(debug: &str) -> String {
-    const SPAN: &str = "Span { file: ";
+    // Spans, and where a script's body starts (a place in the file, as a span is).
+    const PLACES: [&str; 2] = ["Span { file: ", "ScriptOrigin { file: "];
     let mut out = String::with_capacity(debug.len() / 2);
     let mut rest = debug;
-    while let Some(at) = rest.find(SPAN) {
+    while let Some((at, _)) =
+        PLACES.iter().filter_map(|p| rest.find(p).map(|at| (at, p))).min_by_key(|(at, _)| *at)
+    {
         out.push_str(&rest[..at]);
         out.push('_');
         rest = &rest[at..];

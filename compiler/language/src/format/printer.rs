@@ -109,7 +109,17 @@ impl Printer<'_> {
                 }
             }
             let (text, t) = (self.text, self.tokens[i]);
-            self.out.push_str(&text[t.start..t.end]);
+            let token = &text[t.start..t.end];
+            match (t.kind, token.find('{')) {
+                // `#js: { … }`: one space between the prefix and the body, whose text is
+                // the engine's and stays as written.
+                (Kind::Script, Some(open)) => {
+                    self.out.push_str(token[..open].trim_end());
+                    self.out.push(' ');
+                    self.out.push_str(&token[open..]);
+                }
+                _ => self.out.push_str(token),
+            }
             if self.is(i, "{") {
                 self.depth += 1;
             }
@@ -181,9 +191,10 @@ impl Printer<'_> {
         }
         if jk == Kind::Punct && matches!(js, "(" | "[") {
             // `f(x)` is a call and `f (x)` two values: keep what was written.
-            let value_end = matches!(pk, Kind::Word | Kind::Number | Kind::Str | Kind::Colour)
-                || ps == ")"
-                || ps == "]";
+            let value_end =
+                matches!(pk, Kind::Word | Kind::Number | Kind::Str | Kind::Colour | Kind::Script)
+                    || ps == ")"
+                    || ps == "]";
             let keyword = matches!(ps, "if" | "then" | "else" | "not" | "and" | "or");
             if value_end && !keyword {
                 return self.tokens[j].start > self.tokens[p].end;

@@ -16,6 +16,8 @@ pub enum Kind {
     Str,
     /// `#rrggbb` or `#rrggbbaa`.
     Colour,
+    /// A script action, prefix and body (`#js: { … }`): the engine's text, printed as written.
+    Script,
     /// An operator or bracket.
     Punct,
     LineComment,
@@ -81,6 +83,10 @@ pub fn tokenize(text: &str) -> Vec<Token> {
             b'"' => {
                 i = string_end(b, i);
                 Kind::Str
+            }
+            b'#' if let Some(open) = crate::script_text::body_open(b, i) => {
+                i = crate::script_text::body_end(b, open).unwrap_or(b.len());
+                Kind::Script
             }
             b'#' => {
                 i += 1;

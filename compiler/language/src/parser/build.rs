@@ -420,6 +420,27 @@ impl Ctx {
                 };
                 ActionKind::Select { target }
             }
+            Rule::script_action => {
+                let (prefix, body) = (it.next(), it.next());
+                let engine = prefix.map_or_else(
+                    || Ident { name: String::new(), span },
+                    |q| {
+                        let name = q.as_str().trim_start_matches('#').trim_end_matches(':');
+                        Ident { name: name.to_string(), span: self.span(&q) }
+                    },
+                );
+                let (body, body_span) = body.map_or_else(
+                    || (String::new(), span),
+                    |q| {
+                        let s = self.span(&q);
+                        let text = q.as_str();
+                        // The rule matched `{` … `}`: two one-byte braces.
+                        let inner = &text[1..text.len() - 1];
+                        (inner.to_string(), Span { start: s.start + 1, end: s.end - 1, ..s })
+                    },
+                );
+                ActionKind::Script { engine, body, body_span }
+            }
             _ => {
                 let level = self.next_ident(&mut it, span);
                 ActionKind::Alert { level, message: it.next().map_or_else(dummy, |e| self.expr(e)) }

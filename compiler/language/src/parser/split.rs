@@ -1,6 +1,7 @@
 //! Cutting a file into top-level items, before any of them is parsed (parser.rs).
 
 use super::ITEM_KEYWORDS;
+use crate::script_text;
 
 #[derive(Debug, PartialEq)]
 pub enum ChunkKind {
@@ -53,7 +54,7 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
             // ends matter, so the names, numbers and operators between them are skipped.
             while i < bytes.len() {
                 match bytes[i] {
-                    b'"' | b'{' | b'}' | b'/' | b'\n' => break,
+                    b'"' | b'{' | b'}' | b'/' | b'\n' | b'#' => break,
                     b' ' | b'\t' | b'\r' => {}
                     _ => last_code = i + 1,
                 }
@@ -129,6 +130,13 @@ fn split_at(text: &str, column0_splits: bool) -> Vec<Chunk> {
                 last_code = i.min(bytes.len());
                 continue;
             }
+            // A script's body is the engine's text: its braces, strings and comments are not
+            // the language's (an unclosed one was reported by the lexer).
+            b'#' if let Some(open) = script_text::body_open(bytes, i) => {
+                i = script_text::body_end(bytes, open).unwrap_or(bytes.len());
+                last_code = i;
+                continue;
+            }
             b'{' => depth_stack.push(i),
             b'}' => {
                 item_closed = depth_stack.pop().is_some() && depth_stack.is_empty();
@@ -195,6 +203,10 @@ fn trim_end(text: &str, start: usize, end: usize) -> usize {
                     i += 1;
                 }
                 i = (i + 2).min(end);
+            }
+            b'#' if let Some(open) = script_text::body_open(b, i) => {
+                i = script_text::body_end(b, open).unwrap_or(b.len()).min(end);
+                last = i;
             }
             b'"' => {
                 i += 1;

@@ -7,6 +7,7 @@ pub mod check_durations;
 pub mod check_method_args;
 pub mod check_paths;
 pub mod check_schema;
+pub mod check_scripts;
 pub mod check_types;
 pub mod collect_definitions;
 pub mod load_sources;

@@ -339,6 +339,7 @@ impl<'a> Resolver<'a, '_> {
                     self.window_ref(window, scope.module)
                 }
                 ActionKind::Mode { .. }
+                | ActionKind::Script { .. }
                 | ActionKind::Select { target: SelectTarget::Next }
                 | ActionKind::Select { target: SelectTarget::Prev } => {}
                 ActionKind::Select { target: SelectTarget::Object(e) } => self.expr(e, scope),

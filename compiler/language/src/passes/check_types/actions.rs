@@ -74,6 +74,21 @@ impl<'a> Typer<'a, '_> {
                 ast::ActionKind::Hide { window } => {
                     out.push(Action::Hide { window: window.name.clone(), span })
                 }
+                ast::ActionKind::Script { engine, body, body_span } => {
+                    crate::passes::check_scripts::check_script(
+                        &engine.name,
+                        engine.span,
+                        body,
+                        *body_span,
+                        self.diags,
+                    );
+                    out.push(Action::Script {
+                        engine: engine.name.clone(),
+                        body: body.clone(),
+                        span: *body_span,
+                        origin: None,
+                    })
+                }
                 ast::ActionKind::Alert { level, message } => {
                     let m = self.expect(message, scope, &Type::STRING, &"an alert message");
                     out.push(Action::Alert { level: level.name.clone(), message: m, span });

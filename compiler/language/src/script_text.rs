@@ -1,0 +1,117 @@
+//! Where a script action's text is: `#js: { … }`, `#rhai: { … }` (docs/scripting.md).
+//!
+//! A script's body is one raw token of the layout language: from its `{` to the `}` that
+//! balances it, the script's own strings (`"…"`, `'…'`, `` `…` ``) and comments (`//`, `/* */`)
+//! respected, so a brace inside them balances nothing. Every scan of a layout's text (the
+//! lexical pass, the item splitter, the hand-written parser, the formatter) skips a body with
+//! these two functions, so they all agree with `grammar.pest`'s `script_body`.
+
+/// At a `#` that starts a script action (`#` name `:` blanks `{`), the offset of the body's
+/// `{`; `None` when the `#` starts anything else (a colour).
+pub fn body_open(bytes: &[u8], hash: usize) -> Option<usize> {
+    if bytes.get(hash) != Some(&b'#') || !bytes.get(hash + 1)?.is_ascii_alphabetic() {
+        return None;
+    }
+    let mut i = hash + 2;
+    while bytes.get(i).is_some_and(|b| b.is_ascii_alphanumeric() || *b == b'_') {
+        i += 1;
+    }
+    if bytes.get(i) != Some(&b':') {
+        return None;
+    }
+    i += 1;
+    while bytes.get(i).is_some_and(|b| matches!(b, b' ' | b'\t' | b'\n' | b'\r')) {
+        i += 1;
+    }
+    (bytes.get(i) == Some(&b'{')).then_some(i)
+}
+
+/// The engine's prefix of a script action starting at `hash` (`js` for `#js: {`).
+pub fn prefix(text: &str, hash: usize) -> &str {
+    let rest = &text[hash + 1..];
+    &rest[..rest.find(':').unwrap_or(0)]
+}
+
+/// The offset just after the `}` that closes the body opened at `open`; `Err` with the offset
+/// of what is never closed (the body's `{`, or a string or comment inside it) at the end of
+/// the text.
+pub fn body_end(bytes: &[u8], open: usize) -> Result<usize, usize> {
+    let mut depth = 0usize;
+    let mut i = open;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'{' => depth += 1,
+            b'}' => {
+                depth -= 1;
+                if depth == 0 {
+                    return Ok(i + 1);
+                }
+            }
+            q @ (b'"' | b'\'' | b'`') => {
+                let start = i;
+                i += 1;
+                while i < bytes.len() && bytes[i] != q {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+                if i >= bytes.len() {
+                    return Err(start);
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                let start = i;
+                i += 2;
+                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
+                    i += 1;
+                }
+                if i >= bytes.len() {
+                    return Err(start);
+                }
+                i += 1;
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    Err(open)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn end(text: &str) -> Result<usize, usize> {
+        let open = body_open(text.as_bytes(), 0).expect("a script");
+        body_end(text.as_bytes(), open)
+    }
+
+    #[test]
+    fn a_body_ends_at_the_brace_that_balances_its_opening() {
+        let t = "#js: { if (a) { b() } } rest";
+        assert_eq!(end(t), Ok(t.find(" rest").unwrap()));
+    }
+
+    #[test]
+    fn braces_in_the_scripts_strings_and_comments_balance_nothing() {
+        let t = "#js: { let s = \"}\"; let c = '}'; let t = `}`; // }\n /* } */ } x";
+        assert_eq!(end(t), Ok(t.len() - 2));
+    }
+
+    #[test]
+    fn an_unclosed_body_or_string_is_found_where_it_opens() {
+        assert_eq!(end("#rhai:\n{ let x = 1;"), Err(7));
+        assert_eq!(end("#js: { let s = \"ab }"), Err(15));
+    }
+
+    #[test]
+    fn a_colour_is_not_a_script() {
+        assert_eq!(body_open(b"#ff0000", 0), None);
+        assert_eq!(body_open(b"#js x", 0), None);
+        assert_eq!(prefix("#rhai: {}", 0), "rhai");
+    }
+}
