@@ -1,7 +1,7 @@
 //! `mocu run`: the OCU itself. Checks the target (a layout, a profile or a bundle), starts
 //! the DataServer, the module host with the modules the profile names (or the defaults: the
-//! simulator, MAVLink and video), the display modules (window manager, widget renderer, map, video) and
-//! the layout, then runs frames — in a window where there is a display, headless
+//! simulator, MAVLink and video) and the core modules it leaves out (input, the widget
+//! renderer, the map view, the video windows: `crate::core_modules`), then the layout, then runs frames — in a window where there is a display, headless
 //! otherwise — until `--frames N` have passed at 60 Hz, the window is closed, or SIGINT
 //! (Ctrl-C) or SIGTERM. A frame is drawn only when something changed: an idle run sleeps.
 //! On exit it writes `--screenshot`, prints `--dump PATH` as JSON (the display and the
@@ -12,7 +12,7 @@
 use crate::frames::Pace;
 use mocu_dataserver::{DataServer, Guid, Value};
 use mocu_display::{BackendChoice, Display, DisplayOptions, WindowOptions, run_window};
-use mocu_host::{Events, HostEvent, Level, ModuleHost, ModuleSpec, Registry};
+use mocu_host::{Events, HostEvent, Level, ModuleHost, ModuleSpec};
 use mocu_layout::{EventSink, JsonlLog, LayoutConfig, NullSink};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -111,25 +111,8 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
     if !warnings.trim().is_empty() {
         eprint!("{warnings}");
     }
-    let modules = match &bundle.profile {
-        Some(p) if !p.modules.is_empty() => {
-            let mut specs = Vec::new();
-            for (name, settings) in &p.modules {
-                let mut table: toml::Table = serde_json::from_value(settings.clone())
-                    .map_err(|e| TargetError::Io(format!("module `{name}`: {e}")))?;
-                table.insert("name".into(), toml::Value::String(name.clone()));
-                let spec =
-                    ModuleSpec::from_table(&table).map_err(|e| TargetError::Io(e.to_string()))?;
-                specs.push(spec);
-            }
-            let rank = |s: &ModuleSpec| {
-                let order =
-                    s.settings.get("order").and_then(|v| v.as_integer()).unwrap_or(i64::MAX);
-                let core =
-                    ["sim", "mavlink", "video"].iter().position(|k| *k == s.kind).unwrap_or(9);
-                (order, core, s.name.clone())
-            };
-            specs.sort_by_key(rank);
+    let modules = match profile_specs(&bundle).map_err(TargetError::Io)? {
+        Some(mut specs) => {
             let dir = profile_dir(path);
             for s in specs.iter_mut().filter(|s| s.kind == "map") {
                 resolve_map_files(s, &dir);
@@ -141,9 +124,33 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
             }
             Some(specs)
         }
-        _ => None,
+        None => None,
     };
     Ok(Target { bundle, modules })
+}
+
+/// A bundle's profile's modules in start order: their `order` setting, then the core order
+/// sim, mavlink, video, then by name. None when the profile names no module.
+pub(crate) fn profile_specs(
+    bundle: &mocu_language::Bundle,
+) -> Result<Option<Vec<ModuleSpec>>, String> {
+    let Some(p) = bundle.profile.as_ref().filter(|p| !p.modules.is_empty()) else {
+        return Ok(None);
+    };
+    let mut specs = Vec::new();
+    for (name, settings) in &p.modules {
+        let mut table: toml::Table = serde_json::from_value(settings.clone())
+            .map_err(|e| format!("module `{name}`: {e}"))?;
+        table.insert("name".into(), toml::Value::String(name.clone()));
+        specs.push(ModuleSpec::from_table(&table).map_err(|e| e.to_string())?);
+    }
+    let rank = |s: &ModuleSpec| {
+        let order = s.settings.get("order").and_then(|v| v.as_integer()).unwrap_or(i64::MAX);
+        let core = ["sim", "mavlink", "video"].iter().position(|k| *k == s.kind).unwrap_or(9);
+        (order, core, s.name.clone())
+    };
+    specs.sort_by_key(rank);
+    Ok(Some(specs))
 }
 
 /// The folder a profile's file settings (the map's `overlays` and `tiles`, a script module's
@@ -174,21 +181,9 @@ fn resolve_map_files(spec: &mut ModuleSpec, dir: &Path) {
     }
 }
 
-/// The module kinds this binary knows. A project replaces one by registering its own.
-pub fn registry() -> Registry {
-    let mut r = Registry::new();
-    mocu_sim::register(&mut r);
-    mocu_mavlink::register(&mut r);
-    mocu_video::register(&mut r);
-    mocu_input::register(&mut r);
-    mocu_distrib::register(&mut r);
-    mocu_mapdata::register(&mut r);
-    mocu_script::register(&mut r);
-    mocu_host::register_process(&mut r);
-    r
-}
-
-/// The modules to start: the profile's (minus those the flags turn off), or the defaults.
+/// The modules to start: the profile's (minus those the flags turn off), or the defaults;
+/// then the core modules whose role the profile leaves empty, less those it turns off
+/// (`enabled = false`).
 pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
     let mavlink_off = args.mavlink.eq_ignore_ascii_case("off");
     let video_off = args.video.eq_ignore_ascii_case("off");
@@ -210,10 +205,9 @@ pub fn module_specs(target: &Target, args: &RunArgs) -> Vec<ModuleSpec> {
             s.settings.insert("address".into(), args.video.clone().into());
         }
     }
-    // Operator input always runs (a profile may configure it as `[modules.input]`).
-    if !specs.iter().any(|s| s.kind == "input") {
-        specs.push(ModuleSpec::new("input"));
-    }
+    // Operator input and the display's modules always run unless the profile turns them
+    // off; a profile configures them (`[modules.input]`) or puts another kind in their role.
+    crate::core_modules::fill(&mut specs, crate::core_modules::CORE_ROLES);
     if let Some(script) = &args.input_script {
         for s in specs.iter_mut().filter(|s| s.kind == "input") {
             s.settings.insert("script".into(), script.display().to_string().into());
@@ -282,39 +276,23 @@ pub fn main(args: RunArgs) -> ExitCode {
     let log = args.log.is_some().then(|| sink.clone());
     let sink: Arc<dyn EventSink> =
         Arc::new(crate::record::TrialSink { ds: ds.clone(), log, recorder: recorder.clone() });
-    let mut host = ModuleHost::new(ds.clone(), registry());
+    // The modules (the display's last: each finds the others through root.display, of the
+    // screen's size), then the layout.
+    let jit = !args.interpret;
+    let components = match crate::core_modules::components(&target.bundle, jit) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("mocu run: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let _ = mocu_display::ensure_display_object(&ds, screen.0, screen.1);
+    let mut host = ModuleHost::new(ds.clone(), crate::core_modules::registry(components.clone()));
     let events = host.events();
     host.start_all(&module_specs(&target, &args));
-
-    // The display's modules, then the layout: each finds the others through root.display.
-    let library =
-        match mocu_widgets::Library::compile(&all_components(&target.bundle), !args.interpret) {
-            Ok(l) => l,
-            Err(e) => {
-                eprintln!("mocu run: {e}");
-                return ExitCode::from(1);
-            }
-        };
-    let _ = mocu_display::ensure_display_object(&ds, screen.0, screen.1);
-    let renderer =
-        mocu_widgets::WidgetRenderer::start(&ds, library, mocu_widgets::RendererConfig::default())
-            .map(Arc::new);
-    let map = mocu_widgets::MapModule::start(&ds);
-    let video = mocu_video::VideoWindows::start(&ds);
-    if let Err(e) = &video {
-        eprintln!("mocu run: cannot start the video windows: {e}");
-    }
-    if let Err(e) = renderer.as_ref().map(|_| ()).and(map.as_ref().map(|_| ())) {
-        eprintln!("mocu run: cannot start the display modules: {e}");
-    }
-    // The layout runs under the reloader: a saved edit swaps in between two frames.
-    let jit = !args.interpret;
-    let hook = renderer.as_ref().ok().cloned().map(|r| {
-        Arc::new(move |p: &mocu_language::Program| match mocu_widgets::Library::compile(p, jit) {
-            Ok(lib) => r.replace_library(lib),
-            Err(e) => eprintln!("mocu: components: {e}"),
-        }) as Arc<dyn Fn(&mocu_language::Program) + Send + Sync>
-    });
+    // The layout runs under the reloader: a saved edit swaps in between two frames, its
+    // components into the widget renderer.
+    let hook = Some(crate::core_modules::reload_hook(components, jit));
     let options = mocu_hotreload::ReloaderOptions {
         config: LayoutConfig {
             screen: (screen.0 as f64, screen.1 as f64),
@@ -403,9 +381,6 @@ pub fn main(args: RunArgs) -> ExitCode {
     let _ = std::io::stdout().flush();
     let guard = crate::stop::bounded_teardown(code);
     drop(layout);
-    drop(renderer);
-    drop(map);
-    drop(video);
     host.stop_all();
     ds.quiesce();
     drain_events(&events, &sink);

@@ -122,9 +122,10 @@ pub fn main(args: ServeArgs) -> ExitCode {
         !(args.no_sim && s.kind == "sim"
             || off(&args.mavlink) && s.kind == "mavlink"
             || off(&args.video) && s.kind == "video"
-            || s.kind == "input"
+            || crate::core_modules::in_role(s, crate::core_modules::CORE_ROLES)
             || s.kind == "map")
     });
+    mocu_host::fill_roles(&mut specs, &[]);
     for s in specs.iter_mut() {
         let addr = match s.kind.as_str() {
             "mavlink" => &args.mavlink,
@@ -156,7 +157,7 @@ pub fn main(args: ServeArgs) -> ExitCode {
         }
     };
     let sink = crate::record::TrialSink { ds: ds.clone(), log: None, recorder: recorder.clone() };
-    let mut host = ModuleHost::new(ds.clone(), crate::run::registry());
+    let mut host = ModuleHost::new(ds.clone(), crate::core_modules::registry(Default::default()));
     let events = host.events();
     host.start_all(&specs);
     eprintln!("mocu: serving (headless adapter)");

@@ -16,6 +16,7 @@ fn registry() -> Registry {
     mocu_mapdata::register(&mut r);
     mocu_script::register(&mut r);
     mocu_host::register_process(&mut r);
+    mocu_widgets::register(&mut r, mocu_widgets::Components::default());
     r
 }
 
@@ -41,6 +42,8 @@ fn sample(kind: &str, key: &str, ty: SettingType) -> toml::Value {
             640.into()
         }
         ("distrib", "tls_ca" | "tls_cert" | "tls_key") => "".into(),
+        // The host takes `enabled = false` modules out before they start (`fill_roles`).
+        (_, "enabled") => true.into(),
         (_, "kind") => kind.into(),
         _ => match ty {
             SettingType::Int => 1.into(),

@@ -1,7 +1,7 @@
 //! What each module kind of `mocu run` accepts as settings (`[modules.NAME]` tables of a
 //! profile): the declaration the compiler checks profiles against, without depending on the
 //! runtime crates. The runtime reads the same keys (`mocu-sim`, `mocu-mavlink`, `mocu-video`,
-//! `mocu-input`); a test of the `mocu` binary starts every kind with every key declared here.
+//! `mocu-input`, `mocu-widgets`, …); a test of the `mocu` binary starts every kind with every key declared here.
 //! docs/language.md, "Profiles", lists them (and a test keeps that list complete).
 
 /// The type of a setting's value.
@@ -57,13 +57,25 @@ pub struct ModuleKind {
     pub settings: &'static [Setting],
 }
 
+impl Setting {
+    /// A setting: its key, type, default (as text) and what it does.
+    pub const fn new(
+        name: &'static str,
+        ty: SettingType,
+        default: &'static str,
+        description: &'static str,
+    ) -> Setting {
+        Setting { name, ty, default, description }
+    }
+}
+
 const fn s(
     name: &'static str,
     ty: SettingType,
     default: &'static str,
     description: &'static str,
 ) -> Setting {
-    Setting { name, ty, default, description }
+    Setting::new(name, ty, default, description)
 }
 
 use SettingType::*;
@@ -74,7 +86,13 @@ pub const COMMON: &[Setting] = &[
         "kind",
         String,
         "the table's NAME",
-        "Which module runs: sim, mavlink, video, codec, input, distrib, map, script or process",
+        "Which module runs: sim, mavlink, video, codec, input, distrib, map, script, process, widgets, map_view or video_windows",
+    ),
+    s(
+        "enabled",
+        Bool,
+        "true",
+        "false: the module is not started; naming a core module (input, widgets, map_view, video_windows) turns it off",
     ),
     s(
         "order",
@@ -330,6 +348,37 @@ pub const MODULES: &[ModuleKind] = &[
         ],
     },
     ModuleKind {
+        kind: "widgets",
+        description: "The widget renderer: draws the layout's widgets windows (a core module, started unless turned off)",
+        settings: &[
+            s("accepted_ms", Int, "1500", "How long an accepted call's green outline shows, in ms"),
+            s(
+                "refused_ms",
+                Int,
+                "5000",
+                "How long a refused or failed call's red outline and reason show, in ms",
+            ),
+        ],
+    },
+    ModuleKind {
+        kind: "map_view",
+        description: "The map painter: draws the layout's map windows from root.vehicles and root.map (a core module, started unless turned off)",
+        settings: &[],
+    },
+    ModuleKind {
+        kind: "video_windows",
+        description: "The video windows' painter: draws the layout's video windows from the cameras (a core module, started unless turned off)",
+        settings: &[
+            s(
+                "stale_ms",
+                Int,
+                "1000",
+                "No frame for this long: the last one is marked STALE, in ms",
+            ),
+            s("no_video_ms", Int, "3000", "No frame for this long: NO VIDEO, in ms"),
+        ],
+    },
+    ModuleKind {
         kind: "process",
         description: "A module in any language run as a child process, joining over Zenoh (docs/modules.md)",
         settings: &[
@@ -351,9 +400,28 @@ pub const MODULES: &[ModuleKind] = &[
     },
 ];
 
-/// The declaration of a module kind.
+/// Kinds a project declared for its own build ([`declare`]).
+static DECLARED: std::sync::RwLock<Vec<&'static ModuleKind>> = std::sync::RwLock::new(Vec::new());
+
+/// Declares a module kind of a project's own build of `mocu` (the one its registry has), so
+/// that its profiles are checked against its settings as the stock kinds' are: without it,
+/// a profile naming the kind is refused. A kind declared again replaces its declaration; a
+/// stock kind's name declared replaces the stock declaration (a project's own `map_view`).
+pub fn declare(kind: ModuleKind) {
+    let kind: &'static ModuleKind = Box::leak(Box::new(kind));
+    let mut declared = DECLARED.write().unwrap_or_else(|e| e.into_inner());
+    declared.retain(|k| k.kind != kind.kind);
+    declared.push(kind);
+}
+
+/// The declaration of a module kind: a declared one ([`declare`]) or a stock one.
 pub fn kind(name: &str) -> Option<&'static ModuleKind> {
-    MODULES.iter().find(|m| m.kind == name)
+    let declared = DECLARED.read().unwrap_or_else(|e| e.into_inner());
+    declared
+        .iter()
+        .copied()
+        .find(|m| m.kind == name)
+        .or_else(|| MODULES.iter().find(|m| m.kind == name))
 }
 
 impl ModuleKind {

@@ -23,8 +23,10 @@ pub trait Module: Send {
 /// Makes a module of one kind from its spec (settings are checked here or in `start`).
 pub type Factory = Box<dyn Fn(&ModuleSpec) -> Result<Box<dyn Module>, String> + Send + Sync>;
 
-/// Module kinds by name. Registering a kind again replaces it: a profile's project can swap
-/// any core piece (simulator, MAVLink, later the window manager) for its own.
+/// Module kinds by name. Registering a kind again replaces it: a project can swap any core
+/// piece (simulator, MAVLink, the widget renderer, the map view, the video windows, input)
+/// for its own, or register a kind of its own and choose it in the profile
+/// (`[modules.map_view] kind = "my_map"`; [`crate::fill_roles`]).
 #[derive(Default)]
 pub struct Registry {
     kinds: BTreeMap<String, Factory>,
@@ -51,18 +53,33 @@ impl Registry {
 /// Why a module did not start.
 #[derive(Clone, Debug, PartialEq)]
 pub enum StartError {
-    UnknownKind { module: String, kind: String },
-    DuplicateName { module: String },
-    Failed { module: String, reason: String },
-    Panicked { module: String, message: String },
+    /// No kind of that name is registered; `known` lists the kinds that are.
+    UnknownKind {
+        module: String,
+        kind: String,
+        known: Vec<String>,
+    },
+    DuplicateName {
+        module: String,
+    },
+    Failed {
+        module: String,
+        reason: String,
+    },
+    Panicked {
+        module: String,
+        message: String,
+    },
 }
 
 impl fmt::Display for StartError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            StartError::UnknownKind { module, kind } => {
-                write!(f, "module `{module}`: no module kind `{kind}` is registered")
-            }
+            StartError::UnknownKind { module, kind, known } => write!(
+                f,
+                "module `{module}`: no module kind `{kind}` is registered (the kinds are: {})",
+                known.join(", ")
+            ),
             StartError::DuplicateName { module } => {
                 write!(f, "module `{module}`: another module already has this name")
             }
@@ -132,7 +149,8 @@ impl ModuleHost {
             return Err(StartError::DuplicateName { module });
         }
         let Some(factory) = self.registry.kinds.get(&spec.kind) else {
-            return Err(StartError::UnknownKind { module, kind: spec.kind.clone() });
+            let known = self.registry.kinds().map(str::to_string).collect();
+            return Err(StartError::UnknownKind { module, kind: spec.kind.clone(), known });
         };
         let status = crate::world::ensure_path(&self.ds, &["modules", &spec.name], "module")
             .map_err(|e| StartError::Failed { module: module.clone(), reason: e.to_string() })?;

@@ -1,6 +1,6 @@
 //! The module host (paper §2, §3.2): every piece of the OCU that is not the DataServer is a
-//! module — protocol modules, the simulator, later the window manager, input and the widget
-//! renderer — and they are all started the same way, from a list of [`ModuleSpec`]s that a
+//! module — protocol modules, the simulator, input, the widget renderer, the map view and
+//! the video windows — and they are all started the same way, from a list of [`ModuleSpec`]s that a
 //! profile names in order.
 //!
 //! A module gets a [`ModuleContext`]: its DataServer handle, its own serial executor, its
@@ -18,10 +18,12 @@
 mod context;
 mod host;
 mod process;
+mod roles;
 mod spec;
 pub mod world;
 
 pub use context::{HostEvent, Level, ModuleContext};
 pub use host::{Events, Factory, Module, ModuleHost, Registry, StartError};
 pub use process::{ProcessModule, register as register_process};
+pub use roles::fill_roles;
 pub use spec::{ModuleSpec, SpecError};

@@ -85,6 +85,19 @@ fn a_failing_module_is_reported_and_the_others_run() {
 }
 
 #[test]
+fn an_unknown_kind_names_the_module_and_the_kinds_known() {
+    let log = Arc::default();
+    let mut h = host(&log);
+    let err = h.start(&ModuleSpec::new("my_map").named("map_view")).unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "module `map_view`: no module kind `my_map` is registered (the kinds are: \
+         bad-factory, fail, ok, panic, thread-panic)"
+    );
+    assert!(h.running().is_empty());
+}
+
+#[test]
 fn a_panicking_module_is_isolated() {
     let log = Arc::default();
     let mut h = host(&log);

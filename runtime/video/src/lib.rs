@@ -63,15 +63,60 @@ pub use stream::{SourceFilter, Stream, StreamConfig, StreamStats};
 pub use window::{VideoWindows, WindowsConfig};
 
 use mocu_host::{Module, Registry};
+use std::time::Duration;
 
-/// Registers the module kinds `video` (the UDP receiver, with its decoder) and `codec` (a
-/// decoder on its own, for a camera whose receiver has `decode = false`).
+/// Registers the module kinds `video` (the UDP receiver, with its decoder), `codec` (a
+/// decoder on its own, for a camera whose receiver has `decode = false`) and
+/// `video_windows` (the painter of the `video` windows, `window::VideoWindows`).
 pub fn register(registry: &mut Registry) {
+    registry.register("video_windows", |spec| {
+        Ok(Box::new(WindowsModule::from_spec(spec)?) as Box<dyn Module>)
+    });
     registry.register("video", |spec| {
         Ok(Box::new(VideoReceiver::new(ReceiverConfig::from_spec(spec)?)) as Box<dyn Module>)
     });
     registry
         .register("codec", |spec| Ok(Box::new(CodecModule::from_spec(spec)?) as Box<dyn Module>));
+}
+
+/// The `video_windows` module: [`VideoWindows`] started by the module host. Settings
+/// `stale_ms` and `no_video_ms` (a window's `STALE` mark and `NO VIDEO`).
+pub struct WindowsModule {
+    cfg: WindowsConfig,
+    running: Option<VideoWindows>,
+}
+
+impl WindowsModule {
+    pub fn from_spec(spec: &mocu_host::ModuleSpec) -> Result<WindowsModule, String> {
+        let d = WindowsConfig::default();
+        let ms = |key: &str, default: Duration| -> Result<Duration, String> {
+            let v = spec.i64_or(key, default.as_millis() as i64).map_err(|e| e.to_string())?;
+            if !(1..=600_000).contains(&v) {
+                return Err(format!(
+                    "module `{}`: `{key}` must be 1 to 600000 ms, got {v}",
+                    spec.name
+                ));
+            }
+            Ok(Duration::from_millis(v as u64))
+        };
+        let cfg = WindowsConfig {
+            stale_after: ms("stale_ms", d.stale_after)?,
+            no_video_after: ms("no_video_ms", d.no_video_after)?,
+            ..d
+        };
+        Ok(WindowsModule { cfg, running: None })
+    }
+}
+
+impl Module for WindowsModule {
+    fn start(&mut self, ctx: &mocu_host::ModuleContext) -> Result<(), String> {
+        self.running = Some(VideoWindows::start_with(&ctx.ds, self.cfg.clone())?);
+        Ok(())
+    }
+
+    fn stop(&mut self) {
+        self.running = None;
+    }
 }
 
 /// The object at a dotted path text (`root.cameras.udp5600`, `vehicles.usv1.cameras.drive`;

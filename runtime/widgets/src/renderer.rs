@@ -116,11 +116,20 @@ impl WidgetRenderer {
         lib: Library,
         config: RendererConfig,
     ) -> Result<WidgetRenderer, String> {
+        WidgetRenderer::start_shared(ds, Arc::new(lib), config)
+    }
+
+    /// [`WidgetRenderer::start`] with a library others draw with too (`crate::Components`).
+    pub(crate) fn start_shared(
+        ds: &DataServer,
+        lib: Arc<Library>,
+        config: RendererConfig,
+    ) -> Result<WidgetRenderer, String> {
         let display =
             mocu_display::ensure_display_object(ds, 1920, 1080).map_err(|e| e.to_string())?;
         let shared = Arc::new(Shared {
             ds: ds.clone(),
-            lib: Mutex::new(Arc::new(lib)),
+            lib: Mutex::new(lib),
             exec: ds.serial_executor(),
             config,
             state: Mutex::default(),
@@ -142,7 +151,17 @@ impl WidgetRenderer {
 impl WidgetRenderer {
     /// Swaps in newly compiled components (a reloaded layout) and repaints every window.
     pub fn replace_library(&self, lib: Library) {
-        *self.shared.lib.lock() = Arc::new(lib);
+        self.replace_shared(Arc::new(lib));
+    }
+
+    /// The library it draws with now.
+    #[cfg(test)]
+    pub(crate) fn library(&self) -> Arc<Library> {
+        self.shared.lib.lock().clone()
+    }
+
+    pub(crate) fn replace_shared(&self, lib: Arc<Library>) {
+        *self.shared.lib.lock() = lib;
         let windows: Vec<Guid> = self.shared.state.lock().windows.keys().copied().collect();
         for w in windows {
             let _ = invalidate(&self.shared.ds, w);
