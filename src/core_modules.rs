@@ -3,17 +3,19 @@
 //! like the others, each started by default when the profile leaves its role empty
 //! (`mocu_host::fill_roles`), replaced by naming the role with another `kind`, or turned off
 //! with `enabled = false` (docs/modules.md, "Core modules and replacing them"). The window
-//! manager is not one of them: it is the display's frame loop (`mocu_display::Display`),
-//! which `mocu run` drives itself (ARCHITECTURE.md, "runtime/display").
+//! manager's behaviours (`swap`, `animate`, `animate_eased` on `root.display`) are the
+//! `window_manager` module; its frame loop — paint calls, damage, compositing — stays the
+//! display's (`mocu_display::Display`), which `mocu run` drives itself.
 
 use mocu_host::{ModuleHost, ModuleSpec, Registry};
 
 /// The display's modules, in the order they start (after every other module but process
 /// modules): each claims its own windows of `root.display`.
-pub const DISPLAY_ROLES: &[&str] = &["widgets", "map_view", "video_windows"];
+pub const DISPLAY_ROLES: &[&str] = &["window_manager", "widgets", "map_view", "video_windows"];
 
 /// Every core role of `mocu run`, in start order: operator input, then the display's.
-pub const CORE_ROLES: &[&str] = &["input", "widgets", "map_view", "video_windows"];
+pub const CORE_ROLES: &[&str] =
+    &["input", "window_manager", "widgets", "map_view", "video_windows"];
 
 /// The module kinds this binary knows. A project replaces one by registering its own under
 /// the same kind, or adds a kind and names it in a role (`[modules.map_view] kind = "…"`).

@@ -335,7 +335,7 @@ pub fn main(args: RunArgs) -> ExitCode {
     if windowed {
         let opts = WindowOptions {
             title: format!("Mocu — {}", target.bundle.layouts[chosen].path),
-            display: DisplayOptions::new(screen.0, screen.1),
+            display: DisplayOptions::new(screen.0, screen.1).without_window_behaviours(),
             frames: args.frames,
             screenshot: args.screenshot.clone(),
             stop: Some(stop.window.clone()),
@@ -421,15 +421,18 @@ fn run_headless(
     stop: &crate::stop::Stop,
     stepped: Option<&crate::frames::Stepped>,
 ) -> u8 {
-    let mut display =
-        match Display::new(ds, DisplayOptions::new(screen.0, screen.1).backend(BackendChoice::Cpu))
-        {
-            Ok(d) => d,
-            Err(e) => {
-                eprintln!("mocu run: cannot start the display: {e}");
-                return 2;
-            }
-        };
+    let mut display = match Display::new(
+        ds,
+        DisplayOptions::new(screen.0, screen.1)
+            .backend(BackendChoice::Cpu)
+            .without_window_behaviours(),
+    ) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("mocu run: cannot start the display: {e}");
+            return 2;
+        }
+    };
     let pace = args.frames.map_or(Pace::UntilStopped, Pace::Frames);
     let t0 = Instant::now();
     // A summary of the vehicles at most once a second, when a frame is drawn and it

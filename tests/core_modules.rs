@@ -67,6 +67,7 @@ fn the_core_modules_start_when_the_profile_does_not_list_them() {
     let want = [
         ("sim", "sim"),
         ("input", "input"),
+        ("window_manager", "window_manager"),
         ("widgets", "widgets"),
         ("map_view", "map_view"),
         ("video_windows", "video_windows"),
@@ -87,6 +88,7 @@ fn a_profile_puts_another_kind_in_a_role_or_turns_a_core_module_off() {
     let want = [
         ("sim", "sim"),
         ("input", "input"),
+        ("window_manager", "window_manager"),
         ("hud", "widgets"),
         ("video_windows", "video_windows"),
     ];
@@ -116,4 +118,66 @@ fn check_refuses_an_unknown_kind_or_setting_of_a_core_module_naming_what_it_know
     let fine = "[modules.map_view]\nenabled = false\n\n[modules.widgets]\nrefused_ms = 100\n";
     let out = mocu(&["check", &project(&dir, fine)]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+}
+
+/// Where window `a` is after `mocu run` presses S (`swap a b 400ms`) 50 ms in and stops
+/// 20 frames (333 ms) in, with `modules` as the profile's modules: its `x` (b starts at 200).
+fn swapped_x(name: &str, modules: &str) -> f64 {
+    let dir = scratch_dir("core-modules", name);
+    std::fs::write(
+        dir.join("two.mocu"),
+        "window a { layer 1 rect 0 0 100 100 }
+window b { layer 2 rect 200 0 100 100 }
+         bind keyboard { key s -> swap a b 400ms }
+",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("keys.script"),
+        "0 kb connect keyboard \"Keys\"\n50 kb press s\n60 kb release s\n",
+    )
+    .unwrap();
+    let profile = dir.join("project.toml");
+    std::fs::write(
+        &profile,
+        format!(
+            "[profile]\nname = \"wm\"\nscreen = [320, 200]\nlayouts = [\"two.mocu\"]\n\n{modules}"
+        ),
+    )
+    .unwrap();
+    let out = mocu(&[
+        "run",
+        &profile.display().to_string(),
+        "--headless",
+        "--no-sim",
+        "--frames",
+        "20",
+        "--mavlink",
+        "off",
+        "--video",
+        "off",
+        "--no-watch",
+        "--input-script",
+        &dir.join("keys.script").display().to_string(),
+        "--dump",
+        "root.display.a",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let a: serde_json::Value = serde_json::from_slice(&out.stdout).expect("--dump is JSON");
+    a["properties"]["x"].as_f64().unwrap_or_else(|| panic!("no x: {a}\n{stderr}"))
+}
+
+#[test]
+fn the_window_manager_module_animates_a_swap_and_a_profile_can_make_it_instant_or_turn_it_off() {
+    let animated = swapped_x("wm-default", "");
+    assert!(
+        animated > 20.0 && animated < 190.0,
+        "about 280 ms into a 400 ms swap: on its way, at {animated}"
+    );
+    let instant = swapped_x("wm-instant", "[modules.window_manager]\nanimate = false\n");
+    assert_eq!(instant, 200.0, "animate = false: at once");
+    // Without a window manager, the layout's swap exchanges the places itself, at once.
+    let off = swapped_x("wm-off", "[modules.window_manager]\nenabled = false\n");
+    assert_eq!(off, 200.0);
 }

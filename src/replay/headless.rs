@@ -14,7 +14,9 @@ const LEAD_IN: Duration = Duration::from_secs(2);
 pub fn run(player: &mut Player, args: &ReplayArgs, screen: (u32, u32)) -> u8 {
     let mut display = match Display::new(
         player.ds(),
-        DisplayOptions::new(screen.0, screen.1).backend(BackendChoice::Cpu),
+        DisplayOptions::new(screen.0, screen.1)
+            .backend(BackendChoice::Cpu)
+            .without_window_behaviours(),
     ) {
         Ok(d) => d,
         Err(e) => {

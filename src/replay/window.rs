@@ -35,7 +35,7 @@ pub fn run(player: &mut Player, args: &ReplayArgs, screen: (u32, u32)) -> Option
     let stop = WindowStop::default();
     let opts = WindowOptions {
         title: format!("Mocu replay — {}", args.recording.display()),
-        display: DisplayOptions::new(screen.0, screen.1),
+        display: DisplayOptions::new(screen.0, screen.1).without_window_behaviours(),
         frames: args.frames,
         screenshot: args.screenshot.clone(),
         stop: Some(stop.clone()),

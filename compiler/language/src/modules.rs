@@ -86,13 +86,13 @@ pub const COMMON: &[Setting] = &[
         "kind",
         String,
         "the table's NAME",
-        "Which module runs: sim, mavlink, video, codec, input, distrib, map, script, process, widgets, map_view or video_windows",
+        "Which module runs: sim, mavlink, video, codec, input, distrib, map, script, process, window_manager, widgets, map_view or video_windows",
     ),
     s(
         "enabled",
         Bool,
         "true",
-        "false: the module is not started; naming a core module (input, widgets, map_view, video_windows) turns it off",
+        "false: the module is not started; naming a core module (input, window_manager, widgets, map_view, video_windows) turns it off",
     ),
     s(
         "order",
@@ -359,6 +359,16 @@ pub const MODULES: &[ModuleKind] = &[
                 "How long a refused or failed call's red outline and reason show, in ms",
             ),
         ],
+    },
+    ModuleKind {
+        kind: "window_manager",
+        description: "The window manager's behaviours: swap, animate and animate_eased on root.display, which layouts and modules call to move windows (a core module, started unless turned off: then a layout's swap happens at once)",
+        settings: &[s(
+            "animate",
+            Bool,
+            "true",
+            "false: every swap and move happens at once instead of over its duration",
+        )],
     },
     ModuleKind {
         kind: "map_view",

@@ -73,6 +73,10 @@ pub struct DisplayOptions {
     pub clock: Clock,
     /// Frames per second for `run_headless` and animation steps.
     pub rate: f64,
+    /// Whether this display publishes the window manager's behaviours (`swap`, `animate`,
+    /// `animate_eased` on `root.display`): yes by default; `mocu run` leaves them to its
+    /// `window_manager` module ([`crate::WindowBehaviours`]).
+    pub window_behaviours: bool,
 }
 
 impl DisplayOptions {
@@ -84,6 +88,7 @@ impl DisplayOptions {
             background: BACKGROUND,
             clock: Clock::Real,
             rate: 60.0,
+            window_behaviours: true,
         }
     }
 
@@ -94,6 +99,12 @@ impl DisplayOptions {
 
     pub fn clock(mut self, c: Clock) -> DisplayOptions {
         self.clock = c;
+        self
+    }
+
+    /// Leaves `swap`/`animate`/`animate_eased` to a `window_manager` module.
+    pub fn without_window_behaviours(mut self) -> DisplayOptions {
+        self.window_behaviours = false;
         self
     }
 }
@@ -207,7 +218,7 @@ impl Display {
         let display = ensure_display_object(ds, w, h)?;
         let interval = Duration::from_secs_f64(1.0 / options.rate.max(1.0));
         let animator = Animator::new(ds.clone(), options.clock.clone(), interval);
-        let wm = WindowManager::new(ds, display, (w, h), animator)?;
+        let wm = WindowManager::new(ds, display, (w, h), animator, options.window_behaviours)?;
         Ok(Display {
             ds: ds.clone(),
             wm,

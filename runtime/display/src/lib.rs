@@ -13,6 +13,7 @@
 #![forbid(unsafe_code)]
 
 mod anim;
+mod behaviours;
 mod canvas;
 mod color;
 mod compose;
@@ -36,6 +37,7 @@ mod window;
 mod wm;
 
 pub use anim::{Animator, Clock, Easing};
+pub use behaviours::WindowBehaviours;
 pub use canvas::{
     Align, Baseline, Brush, Canvas, ImageFit, LineCap, LineJoin, Stroke, TextMetrics, TextStyle,
     fit_rect, picture, picture_key,

@@ -7,7 +7,7 @@
 //! (`window`) in the world model and calls whatever `paint` method is published under
 //! them; a window no module claims is an empty layer.
 
-use crate::anim::{Animator, Easing};
+use crate::anim::Animator;
 use crate::compose::LayerView;
 use crate::geom::{IRect, Size};
 use crate::paint;
@@ -258,6 +258,9 @@ pub struct WindowManager {
     stacking: Vec<Guid>,
     size: (u32, u32),
     animator: Arc<Animator>,
+    /// `swap`, `animate`, `animate_eased` on `root.display`, when this display publishes
+    /// them (`DisplayOptions::window_behaviours`; else the `window_manager` module does).
+    _behaviours: Option<crate::behaviours::WindowBehaviours>,
     hover: Option<Guid>,
     capture: Option<(Guid, i64)>,
 }
@@ -273,6 +276,7 @@ impl WindowManager {
         display: Guid,
         size: (u32, u32),
         animator: Arc<Animator>,
+        behaviours: bool,
     ) -> Result<WindowManager, DsError> {
         let shared = Arc::new(Shared { state: Mutex::default(), wake: Condvar::new() });
         let exec = ds.serial_executor();
@@ -303,8 +307,18 @@ impl WindowManager {
             })?;
             subs.lock().push(sub);
         }
-        publish_wm_methods(ds, display, &animator)?;
+        let behaviours = if behaviours {
+            Some(crate::behaviours::WindowBehaviours::publish_with(
+                ds,
+                display,
+                animator.clone(),
+                true,
+            )?)
+        } else {
+            None
+        };
         Ok(WindowManager {
+            _behaviours: behaviours,
             ds: ds.clone(),
             display,
             shared,
@@ -744,9 +758,6 @@ impl Drop for WindowManager {
                 self.ds.unsubscribe(s);
             }
         }
-        for m in ["swap", "animate", "animate_eased"] {
-            let _ = self.ds.unpublish_method(self.display, m);
-        }
         let windows: Vec<Guid> = self.shared.state.lock().windows.keys().copied().collect();
         for g in windows {
             let _ = self.ds.unpublish_method(g, "invalidate");
@@ -892,82 +903,6 @@ fn publish_invalidate(ds: &DataServer, window: Guid, sh: &Arc<Shared>) {
         sh.changed(&mut st);
         CallOutcome::Accepted(vec![])
     });
-}
-
-/// `swap(a, b, ms)`, `animate(window, x, y, w, h, ms)` and
-/// `animate_eased(window, x, y, w, h, ms, easing)` on `root.display`.
-fn publish_wm_methods(
-    ds: &DataServer,
-    display: Guid,
-    animator: &Arc<Animator>,
-) -> Result<(), DsError> {
-    let find = {
-        let ds = ds.clone();
-        move |name: &str| -> Option<Guid> {
-            let g = ds.find_child(display, name).ok()??;
-            (ds.info(g).ok()?.kind.as_ref() == WINDOW_TYPE).then_some(g)
-        }
-    };
-    let an = animator.clone();
-    let f2 = find.clone();
-    ds.publish_method_fn(
-        display,
-        MethodSpec::new("swap")
-            .param(ParamSpec::new("a", ValueKind::String))
-            .param(ParamSpec::new("b", ValueKind::String))
-            .param(ParamSpec::new("ms", ValueKind::Int))
-            .defaults(CallOptions::immediate())
-            .describe("Exchanges two windows' rectangles, animated with ease-in-out"),
-        move |a| {
-            let (Some(x), Some(y)) = (a[0].as_str().and_then(&f2), a[1].as_str().and_then(&f2))
-            else {
-                return CallOutcome::Refused("no such window".into());
-            };
-            let ms = a[2].as_i64().unwrap_or(0).max(0) as u64;
-            an.swap(x, y, Duration::from_millis(ms), Easing::EaseInOut);
-            CallOutcome::Accepted(vec![])
-        },
-    )?;
-    let rect_params = |spec: MethodSpec| {
-        spec.param(ParamSpec::new("window", ValueKind::String))
-            .param(ParamSpec::new("x", ValueKind::Float))
-            .param(ParamSpec::new("y", ValueKind::Float))
-            .param(ParamSpec::new("w", ValueKind::Float))
-            .param(ParamSpec::new("h", ValueKind::Float))
-            .param(ParamSpec::new("ms", ValueKind::Int))
-            .defaults(CallOptions::immediate())
-    };
-    for eased in [false, true] {
-        let an = animator.clone();
-        let f3 = find.clone();
-        let mut spec =
-            rect_params(MethodSpec::new(if eased { "animate_eased" } else { "animate" }));
-        if eased {
-            spec = spec.param(ParamSpec::new("easing", ValueKind::String));
-        }
-        ds.publish_method_fn(
-            display,
-            spec.describe("Moves/resizes a window, animated"),
-            move |a| {
-                let Some(w) = a[0].as_str().and_then(&f3) else {
-                    return CallOutcome::Refused("no such window".into());
-                };
-                let easing = if eased {
-                    match a[6].as_str().and_then(Easing::parse) {
-                        Some(e) => e,
-                        None => return CallOutcome::Refused("unknown easing".into()),
-                    }
-                } else {
-                    Easing::EaseInOut
-                };
-                let to = [arg_f(&a[1]), arg_f(&a[2]), arg_f(&a[3]), arg_f(&a[4])];
-                let ms = a[5].as_i64().unwrap_or(0).max(0) as u64;
-                an.start(w, to, Duration::from_millis(ms), easing);
-                CallOutcome::Accepted(vec![])
-            },
-        )?;
-    }
-    Ok(())
 }
 
 impl WindowManager {

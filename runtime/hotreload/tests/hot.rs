@@ -395,7 +395,10 @@ fn fire_first_binding(r: &Rig) {
 fn a_saved_script_action_runs_its_new_text_and_a_script_syntax_error_is_refused_in_the_banner() {
     mocu_layout::install_script_checker();
     let with_script = |body: &str| {
-        format!("{}bind keyboard {{ key space -> #js: {{ {body} }} }}\n", layout_text("#ff0000", 100, ""))
+        format!(
+            "{}bind keyboard {{ key space -> #js: {{ {body} }} }}\n",
+            layout_text("#ff0000", 100, "")
+        )
     };
     let mut r = rig(&with_script("mocu.write(\"out.word\", \"old\");"));
     r.ds.create_object(Guid::ROOT, ObjectInfo::new("out", "folder")).unwrap();

@@ -1,5 +1,5 @@
-//! The module kinds of this crate: `widgets` (the widget renderer) and `map_view` (the map
-//! painter). Each is a module like the others: started by the module host from the profile,
+//! The module kinds of this crate: `widgets` (the widget renderer), `map_view` (the map
+//! painter) and `window_manager` (the window manager's behaviours: `swap`, `animate`). Each is a module like the others: started by the module host from the profile,
 //! or by default when the profile leaves its role empty, and replaceable by a project's
 //! own kind (docs/modules.md, "Core modules and replacing them").
 
@@ -108,7 +108,7 @@ impl Module for MapView {
 }
 
 /// Registers the kinds `widgets` (settings `accepted_ms`, `refused_ms`: how long a call's
-/// green or red outline shows) and `map_view`. The renderer draws with `components`.
+/// green or red outline shows), `map_view` and `window_manager` (setting `animate`). The renderer draws with `components`.
 pub fn register(registry: &mut Registry, components: Components) {
     registry.register("widgets", move |spec| {
         let d = RendererConfig::default();
@@ -121,6 +121,39 @@ pub fn register(registry: &mut Registry, components: Components) {
         Ok(Box::new(Widgets { components, config, running: None }) as Box<dyn Module>)
     });
     registry.register("map_view", |_| Ok(Box::new(MapView::default()) as Box<dyn Module>));
+    registry.register("window_manager", |spec| {
+        let animate = spec.bool_or("animate", true).map_err(|e| e.to_string())?;
+        Ok(Box::new(WindowManager { animate, running: None }) as Box<dyn Module>)
+    });
+}
+
+/// The `window_manager` module: the window manager's behaviours on `root.display` (`swap`,
+/// `animate`, `animate_eased`; setting `animate`, true: windows move over the duration
+/// asked, false: at once). The frame loop that paints and composites the windows stays the
+/// display's (`mocu_display::Display`, made `without_window_behaviours`).
+struct WindowManager {
+    animate: bool,
+    running: Option<mocu_display::WindowBehaviours>,
+}
+
+impl Module for WindowManager {
+    fn start(&mut self, ctx: &ModuleContext) -> Result<(), String> {
+        let display = match ctx.ds.resolve(&["display"]) {
+            Some(d) => d,
+            // `mocu run` makes it at the screen's size first; alone, the default screen.
+            None => mocu_display::ensure_display_object(&ctx.ds, 1920, 1080)
+                .map_err(|e| e.to_string())?,
+        };
+        let rate = mocu_display::DisplayOptions::new(1, 1).rate;
+        let b = mocu_display::WindowBehaviours::publish(&ctx.ds, display, rate, self.animate)
+            .map_err(|e| e.to_string())?;
+        self.running = Some(b);
+        Ok(())
+    }
+
+    fn stop(&mut self) {
+        self.running = None;
+    }
 }
 
 #[cfg(test)]
