@@ -214,7 +214,21 @@ pub struct Each {
     pub var: Ident,
     pub source: Expr,
     pub object_type: Option<(String, Span)>,
+    /// `flow down rect … anchor … gap …`: the runtime places the instances' windows.
+    pub flow: Option<Flow>,
     pub items: Vec<Item>,
+    pub span: Span,
+}
+
+/// `flow DIRECTION rect X Y W H [anchor NAME] [gap N]` in a `for each` header: the region
+/// the instances' windows are placed in, one after another (checked in check_types).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Flow {
+    /// `down` or `right` (E0215 for others).
+    pub direction: Ident,
+    pub rect: Vec<Expr>,
+    pub anchor: Option<Ident>,
+    pub gap: Option<Expr>,
     pub span: Span,
 }
 

@@ -369,10 +369,17 @@ impl Shift for Item {
                 actions.shift(d, f);
                 span.shift(d, f);
             }
-            Item::Each(Each { var, source, object_type, items, span }) => {
+            Item::Each(Each { var, source, object_type, flow, items, span }) => {
                 var.shift(d, f);
                 source.shift(d, f);
                 object_type.shift(d, f);
+                if let Some(Flow { direction, rect, anchor, gap, span }) = flow {
+                    direction.shift(d, f);
+                    rect.shift(d, f);
+                    anchor.shift(d, f);
+                    gap.shift(d, f);
+                    span.shift(d, f);
+                }
                 items.shift(d, f);
                 span.shift(d, f);
             }

@@ -324,9 +324,30 @@ pub struct Template {
     /// The object whose children are iterated.
     pub source: Path,
     pub object_type: Option<String>,
+    /// `flow …`: the runtime places each instance's windows in a region, one after another.
+    #[serde(default)]
+    pub flow: Option<Flow>,
     pub windows: Vec<Window>,
     pub widgets: Vec<Widget>,
     pub watches: Vec<Watch>,
+    pub span: Span,
+}
+
+/// `flow down rect X Y W H anchor NAME gap N`: each instance's windows (as one block: the
+/// box around them) are placed one after another in the region, down a column or along a
+/// row, wrapping to the next when the next would leave it; those that do not fit are hidden
+/// and counted in a "+N more" label (docs/language.md, "Per-vehicle templates").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Flow {
+    /// Down a column (wrapping to the next column on the right), else along a row
+    /// (wrapping to the next row below).
+    pub down: bool,
+    /// The region: x, y, width, height, as a window's `rect` (px of the design, or %).
+    pub rect: Vec<Bound>,
+    #[serde(default)]
+    pub anchor: crate::placement::Anchor,
+    /// Between two instances, in design px.
+    pub gap: f64,
     pub span: Span,
 }
 
@@ -529,6 +550,9 @@ impl Program {
             };
         let windows =
             self.windows.iter().chain(self.templates.iter().flat_map(|t| t.windows.iter()));
+        for f in self.templates.iter().filter_map(|t| t.flow.as_ref()) {
+            f.rect.iter().for_each(|x| b(x, expr));
+        }
         for w in windows {
             w.rect
                 .iter()

@@ -20,6 +20,7 @@ use std::sync::{Arc, Weak};
 use std::time::Duration;
 
 mod compile;
+mod flow;
 mod instances;
 mod lets;
 pub(crate) use compile::{
@@ -151,6 +152,17 @@ pub(crate) enum Target {
     Node(usize),
     WatchWhen(usize),
     WatchClear(usize),
+    /// A flowed window's `x`, `y`, `w`, `h` or `visible`, for its template's flow to place.
+    FlowBox {
+        instance: usize,
+        window: usize,
+        field: usize,
+    },
+    /// A flow's region (`graph/flow.rs`).
+    FlowRegion {
+        template: usize,
+        field: usize,
+    },
 }
 
 pub(crate) struct Cell {
@@ -624,6 +636,7 @@ impl Shared {
                 self.write_output(st, target, v);
             }
         }
+        self.place_flows(st);
     }
 
     fn write_output(self: &Arc<Self>, st: &mut State, target: Target, v: Option<Value>) {
@@ -646,6 +659,10 @@ impl Shared {
             Target::WatchClear(w) => {
                 crate::watch::on_clear(self, st, w, v.and_then(|v| v.as_bool()))
             }
+            Target::FlowBox { instance, window, field } => {
+                flow::on_box(st, instance, window, field, v)
+            }
+            Target::FlowRegion { template, field } => flow::on_region(st, template, field, v),
         }
     }
 }

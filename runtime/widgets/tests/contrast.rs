@@ -388,6 +388,12 @@ fn draw_native_widgets() -> Vec<Run> {
         ),
         ("context_menu", "ContextMenu", menu, Rect::new(500.0, 10.0, 180.0, 110.0)),
         (
+            "flow_more",
+            "FlowMore",
+            props(&[("count", Value::Int(5))]),
+            Rect::new(500.0, 130.0, 112.0, 24.0),
+        ),
+        (
             "video",
             "Video",
             props(&[("source", Value::from("cam1"))]),

@@ -440,46 +440,60 @@ fn alerts_cover_neither_header_nor_tape(ds: &DataServer, what: &str) -> usize {
     checked
 }
 
-/// Fig. 3 with eight USVs on a 1280×720 screen: the strips that fit above the dial (the
-/// others hidden), the vehicle list ends with "+N more", nothing runs over the dial.
+/// Fig. 3 with eight USVs on every screen from 800×480 to 3840×2160: the strips its flow
+/// places above the dial (the others hidden and counted "+N more" under them), none over
+/// another, over the dial, the horizon, the legend or the vehicle list, all on the screen;
+/// the vehicle list ends with "+N more" too. The frame at 1280×720 is a golden image.
 #[test]
-fn fig3_with_eight_usvs_on_a_small_screen_overlaps_nothing() {
-    let size = (1280, 720);
-    let rig = Rig::new(&root().join("layouts/fig3-multi-usv.mocu"), size, steady());
-    let ctx = ModuleContext::detached("sim", rig.ds.clone());
-    let cfg =
-        SimConfig { seed: 7, usv: 8, appear_every: 0.0, autostart: true, ..SimConfig::default() };
-    let sim = Sim::new(ctx, cfg).unwrap();
-    for _ in 0..100 {
-        sim.step(0.05);
-    }
-    let mut rig = rig;
-    let f = rig.frame();
-    let dial_top = {
-        let d = rig.widget("overlay", "speed");
-        rig.ds.get(d, "y").unwrap().as_f64().unwrap()
-    };
-    let display = rig.ds.resolve(&["display"]).unwrap();
-    let mut shown = 0;
-    for w in rig.ds.children(display).unwrap() {
-        let info = rig.ds.info(w).unwrap();
-        if !info.name.starts_with("strip@") {
-            continue;
+fn fig3_with_eight_usvs_overlaps_nothing_at_any_screen_size() {
+    for size in [(800, 480), (1280, 720), (1920, 1080), (3840, 2160)] {
+        let rig = Rig::new(&root().join("layouts/fig3-multi-usv.mocu"), size, steady());
+        let ctx = ModuleContext::detached("sim", rig.ds.clone());
+        let cfg = SimConfig {
+            seed: 7,
+            usv: 8,
+            appear_every: 0.0,
+            autostart: true,
+            ..SimConfig::default()
+        };
+        let sim = Sim::new(ctx, cfg).unwrap();
+        for _ in 0..100 {
+            sim.step(0.05);
         }
-        let visible = rig.ds.get(w, "visible").unwrap() == Value::Bool(true);
-        let bottom = rig.ds.get(w, "y").unwrap().as_f64().unwrap()
-            + rig.ds.get(w, "h").unwrap().as_f64().unwrap();
-        if visible {
-            shown += 1;
-            assert!(
-                bottom <= dial_top,
-                "{} ends at {bottom}, the dial starts at {dial_top}",
-                info.name
-            );
+        let mut rig = rig;
+        let f = rig.frame();
+        let ds = &rig.ds;
+        let screen = (0.0, 0.0, size.0 as f64, size.1 as f64);
+        let others: Vec<(&str, ScreenRect)> = ["speed", "horizon", "legend", "fleet", "tape"]
+            .into_iter()
+            .map(|w| (w, rect_of(ds, rig.widget("overlay", w), (0.0, 0.0))))
+            .collect();
+        let display = ds.resolve(&["display"]).unwrap();
+        let mut shown: Vec<(String, ScreenRect)> = Vec::new();
+        for w in ds.children(display).unwrap() {
+            let name = ds.info(w).unwrap().name.to_string();
+            if name.starts_with("strip") && ds.get(w, "visible").unwrap() == Value::Bool(true) {
+                shown.push((name, rect_of(ds, w, (0.0, 0.0))));
+            }
+        }
+        let strips = shown.iter().filter(|(n, _)| n.starts_with("strip@")).count();
+        assert!((3..8).contains(&strips), "{size:?}: {strips} strips shown");
+        let more = ds.resolve(&["display", "strip+more"]).unwrap();
+        assert_eq!(ds.get(more, "more").unwrap(), Value::Int(8 - strips as i64), "{size:?}");
+        assert!(shown.iter().any(|(n, _)| n == "strip+more"), "{size:?}: no \"+N more\"");
+        for (i, (a, ra)) in shown.iter().enumerate() {
+            let on_screen = ra.0 >= 0.0 && ra.1 >= 0.0 && ra.0 + ra.2 <= screen.2;
+            assert!(on_screen && ra.1 + ra.3 <= screen.3, "{size:?}: {a} {ra:?} off the screen");
+            for (b, rb) in
+                shown[i + 1..].iter().map(|(n, r)| (n.as_str(), *r)).chain(others.clone())
+            {
+                assert!(!overlap(*ra, rb), "{size:?}: {a} {ra:?} overlaps {b} {rb:?}");
+            }
+        }
+        if size == (1280, 720) {
+            check_golden("fig3_eight_usvs_1280x720", &f);
         }
     }
-    assert!((1..8).contains(&shown), "{shown} strips shown");
-    check_golden("fig3_eight_usvs_1280x720", &f);
 }
 
 /// The built-in alert layer takes the pointer only where it draws: a press on a row

@@ -179,6 +179,13 @@ impl Walker<'_> {
             Item::Each(e) => {
                 self.line_at(e.span.start);
                 self.expr(&e.source);
+                if let Some(flow) = &e.flow {
+                    // On the header's line: `flow down rect … anchor bottom-left gap 8 {`.
+                    flow.rect.iter().chain(&flow.gap).for_each(|x| self.expr(x));
+                    if let Some(a) = &flow.anchor {
+                        self.glue(a.span);
+                    }
+                }
                 e.items.iter().for_each(|i| self.item(i));
             }
         }

@@ -195,16 +195,19 @@ impl Ctx {
                     .next()
                     .map_or(Expr { kind: ExprKind::Name("root".into()), span }, |e| self.expr(e));
                 let mut object_type = None;
+                let mut flow = None;
                 let mut items = Vec::new();
                 for q in inner {
-                    if q.as_rule() == Rule::string {
-                        let s = self.span(&q);
-                        object_type = Some((self.plain_string(q), s));
-                    } else {
-                        items.push(self.item(q));
+                    match q.as_rule() {
+                        Rule::string => {
+                            let s = self.span(&q);
+                            object_type = Some((self.plain_string(q), s));
+                        }
+                        Rule::flow_clause => flow = Some(self.flow(q)),
+                        _ => items.push(self.item(q)),
                     }
                 }
-                Item::Each(Each { var, source, object_type, items, span })
+                Item::Each(Each { var, source, object_type, flow, items, span })
             }
             _ => Item::Let(Let {
                 name: Ident { name: String::new(), span },
@@ -280,6 +283,26 @@ impl Ctx {
         }
         let component = idents.pop().unwrap_or(Ident { name: String::new(), span });
         Widget { name: idents.pop(), component, at, anchor, args, handlers, span }
+    }
+
+    /// `flow down rect X Y W H anchor NAME gap N` (the `flow` keyword's pair left out).
+    fn flow(&self, p: Pair<Rule>) -> Flow {
+        let span = self.span(&p);
+        let mut direction = Ident { name: String::new(), span };
+        let (mut rect, mut anchor, mut gap) = (Vec::new(), None, None);
+        for q in p.into_inner() {
+            match q.as_rule() {
+                Rule::ident => direction = self.ident(q),
+                Rule::rect_prop => rect = q.into_inner().map(|g| self.geom(g)).collect(),
+                Rule::anchor_prop => anchor = self.anchor(q),
+                Rule::flow_gap => {
+                    gap =
+                        q.into_inner().find(|x| x.as_rule() == Rule::number).map(|n| self.number(n))
+                }
+                _ => {}
+            }
+        }
+        Flow { direction, rect, anchor, gap, span }
     }
 
     /// `anchor bottom-right`: the name, checked later (passes/check_anchors.rs).

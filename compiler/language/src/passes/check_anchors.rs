@@ -1,5 +1,6 @@
 //! Screen placement (see [`crate::placement`]): `anchor` names (E0213), the `design` size
-//! (E0214: in the layout file, once, positive px) and, in a layout with a design, positions
+//! (E0214: in the layout file, once, positive px), a `for each`'s `flow` (E0215: `down` or
+//! `right`, a gap in px, windows to place) and, in a layout with a design, positions
 //! computed from the screen's own size (W0005), which would be scaled twice.
 
 use crate::ast::{self, ExprKind, Item, LitUnit};
@@ -65,8 +66,41 @@ fn anchors(item: &Item, diags: &mut Diagnostics) {
     match item {
         Item::Window(w) => anchor(w.anchor.as_ref(), diags),
         Item::In(b) => b.widgets.iter().for_each(|w| anchor(w.anchor.as_ref(), diags)),
-        Item::Each(e) => e.items.iter().for_each(|i| anchors(i, diags)),
+        Item::Each(e) => {
+            if let Some(f) = &e.flow {
+                anchor(f.anchor.as_ref(), diags);
+                flow(f, e, diags);
+            }
+            e.items.iter().for_each(|i| anchors(i, diags))
+        }
         _ => {}
+    }
+}
+
+/// The ways a flow goes.
+const DIRECTIONS: [&str; 2] = ["down", "right"];
+
+/// E0215: a flow's direction, its gap's unit, and windows for it to place.
+fn flow(f: &ast::Flow, e: &ast::Each, diags: &mut Diagnostics) {
+    let dir = &f.direction;
+    if !DIRECTIONS.contains(&dir.name.as_str()) {
+        diags
+            .error(codes::BAD_FLOW, dir.span, format!("unknown flow direction `{}`", dir.name))
+            .help("a flow goes `down` (a column, then the next on its right) or `right` (a row, then the next below)")
+            .suggest(&dir.name, DIRECTIONS.iter().copied());
+    }
+    if let Some(g) = &f.gap
+        && let ExprKind::Number { unit: Some(u), .. } = &g.kind
+        && *u != LitUnit::Px
+    {
+        diags
+            .error(codes::BAD_FLOW, g.span, "a flow's gap is in px")
+            .help("write the space between two instances in px of the design: `gap 8`");
+    }
+    if !e.items.iter().any(|i| matches!(i, Item::Window(_))) {
+        diags
+            .error(codes::BAD_FLOW, f.span, "`flow` places the template's windows, and it has none")
+            .help("declare a `window` in the `for each` body, or leave `flow` out");
     }
 }
 
@@ -88,7 +122,11 @@ pub fn warn_screen_px(program: &Program, diags: &mut Diagnostics) {
     }
     let windows = program.windows.iter().chain(program.templates.iter().flat_map(|t| &t.windows));
     let widgets = program.widgets.iter().chain(program.templates.iter().flat_map(|t| &t.widgets));
-    let bounds = windows.flat_map(|w| w.rect.iter()).chain(widgets.flat_map(|w| w.at.iter()));
+    let flows = program.templates.iter().filter_map(|t| t.flow.as_ref());
+    let bounds = windows
+        .flat_map(|w| w.rect.iter())
+        .chain(widgets.flat_map(|w| w.at.iter()))
+        .chain(flows.flat_map(|f| f.rect.iter()));
     for b in bounds {
         if reads_screen_size(b) {
             diags

@@ -291,6 +291,8 @@ impl<'a> Typer<'a, '_> {
                     }
                     t.clone()
                 });
+                // The region is the template's, not an instance's: read without `v`, `index`.
+                let flow = e.flow.as_ref().map(|f| self.flow(f, scope));
                 let var_ty = Type::new(TypeKind::Object {
                     object_type: object_type.as_deref().map(Name::new),
                 });
@@ -320,6 +322,7 @@ impl<'a> Typer<'a, '_> {
                     var: e.var.name.clone(),
                     source,
                     object_type,
+                    flow,
                     windows: inner.windows,
                     widgets: inner.widgets,
                     watches: inner.watches,
@@ -374,6 +377,21 @@ impl<'a> Typer<'a, '_> {
             }
         }
         win
+    }
+
+    /// A `flow` clause; its direction and gap are checked in passes/check_flows.rs.
+    fn flow(&mut self, f: &ast::Flow, scope: &Scope<'a>) -> crate::program::Flow {
+        let gap = match f.gap.as_ref().map(|g| &g.kind) {
+            Some(ast::ExprKind::Number { value, .. }) => *value,
+            _ => 0.0,
+        };
+        crate::program::Flow {
+            down: f.direction.name != "right",
+            rect: f.rect.iter().map(|g| self.geometry(g, scope)).collect(),
+            anchor: anchor_of(f.anchor.as_ref()),
+            gap,
+            span: f.span,
+        }
     }
 
     fn geometry(&mut self, e: &ast::Expr, scope: &Scope<'a>) -> Bound {

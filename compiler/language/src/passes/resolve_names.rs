@@ -49,6 +49,8 @@ struct Scope<'a> {
     self_ok: bool,
     /// In an action: `selected` names the selected object.
     selected_ok: bool,
+    /// In a `for each`'s `flow` region: that template's variable (not known there).
+    flow_of: Option<&'a str>,
 }
 
 impl<'a> Scope<'a> {
@@ -116,6 +118,9 @@ impl<'a> Resolver<'a, '_> {
             }
             Item::Each(e) => {
                 self.expr(&e.source, scope);
+                // The flow's region is the template's: `v` and `index` are not known in it.
+                let region = Scope { flow_of: Some(&e.var.name), ..scope.clone() };
+                e.flow.iter().flat_map(|f| &f.rect).for_each(|x| self.expr(x, &region));
                 let mut s = scope.with(&e.var.name, None).with("index", None);
                 for inner in &e.items {
                     self.item(inner, &s, None);
@@ -393,6 +398,10 @@ impl<'a> Resolver<'a, '_> {
         }
         let d = self.diags.error(codes::UNKNOWN_NAME, span, format!("unknown name `{name}`"));
         d.label("not found in this scope");
+        if let Some(var) = scope.flow_of.filter(|v| name == *v || name == "index") {
+            d.help(format!("a flow's region is the template's, placed once for all its instances: `{var}` and `index` are not known in it"));
+            return;
+        }
         if scope.limit.is_some() && self.defs.lets[scope.module].contains_key(name) {
             d.help(format!(
                 "`{name}` is defined further down: a `let` can only use the lets above it"

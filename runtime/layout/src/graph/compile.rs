@@ -224,7 +224,7 @@ fn scaled(
 /// The `x`, `y` (and `w`, `h` when given) of a rectangle in its parent, in screen px: its
 /// offsets measured from the anchor's edges (`mocu_language::placement::place`). `parent`
 /// gives the parent's width (true) or height, asked only for centre and end anchors.
-fn place(
+pub(super) fn place(
     lw: &mut Lowerer,
     rect: &[Bound],
     anchor: Anchor,
@@ -428,11 +428,16 @@ pub(crate) fn compile_template(
             t.source
         )));
     }
+    let flow = match (&t.flow, t.windows.first()) {
+        (Some(f), Some(first)) => Some(super::flow::compile_flow(b, f, frame, &first.name)?),
+        _ => None,
+    };
     Ok(TemplateRt {
         alive: true,
         source: t.source.segments.clone(),
         object_type: t.object_type.clone(),
         var: t.var.clone(),
+        flow,
         windows,
         widgets,
         watches,

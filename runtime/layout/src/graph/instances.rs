@@ -18,6 +18,8 @@ pub(crate) struct TemplateRt {
     pub(crate) source: Vec<String>,
     pub(crate) object_type: Option<String>,
     pub(crate) var: String,
+    /// `flow …`: its windows placed by the runtime (`flow.rs`).
+    pub(crate) flow: Option<super::flow::FlowRt>,
     pub(crate) windows: Vec<CompiledWindow>,
     pub(crate) widgets: Vec<CompiledWidget>,
     pub(crate) watches: Vec<crate::watch::CompiledWatch>,
@@ -33,6 +35,9 @@ pub(crate) struct Instance {
     pub(crate) objects: Vec<Guid>,
     pub(crate) cells: Vec<usize>,
     pub(crate) watches: Vec<usize>,
+    /// Its template flows: its windows' boxes, in order, go to the flow (`flow.rs`).
+    pub(crate) flowed: bool,
+    pub(crate) boxes: Vec<super::flow::FlowBox>,
 }
 
 impl Shared {
@@ -83,8 +88,14 @@ impl Shared {
                 let text = self.path_from(st, base, objs, instance);
                 let _ = self.ds.set(g, "source", Value::str(&text));
             }
-            let targets =
-                WINDOW_OUTPUTS.iter().map(|n| Target::Prop(g, PropName::new(n))).collect();
+            let flowed = instance.and_then(|i| st.instances[i].as_mut()).filter(|x| x.flowed);
+            let targets = match (flowed, instance) {
+                (Some(inst), Some(i)) => {
+                    inst.boxes.push(super::flow::FlowBox::new(g));
+                    super::flow::window_targets(g, i, inst.boxes.len() - 1)
+                }
+                _ => WINDOW_OUTPUTS.iter().map(|n| Target::Prop(g, PropName::new(n))).collect(),
+            };
             let cell = self.add_cell(st, &w.f, targets, instance);
             made.push((g, cell));
             st.windows.insert(name.clone(), g);
@@ -210,6 +221,7 @@ impl Shared {
                 }
             });
         st.templates[t].source_watch = watch.ok();
+        self.start_flow(st, t);
     }
 
     /// Ends template `t`: its instances go, it follows nothing any more.
@@ -225,6 +237,7 @@ impl Shared {
         for i in old {
             self.remove_instance(st, i);
         }
+        self.stop_flow(st, t);
     }
 
     pub(crate) fn template_source(self: &Arc<Self>, st: &mut State, t: usize, obj: Option<Guid>) {
@@ -296,6 +309,8 @@ impl Shared {
             objects: vec![],
             cells: vec![],
             watches: vec![],
+            flowed: st.templates[t].flow.is_some(),
+            boxes: vec![],
         }));
         let tpl = std::mem::replace(
             &mut st.templates[t],
@@ -304,6 +319,7 @@ impl Shared {
                 source: vec![],
                 object_type: None,
                 var: String::new(),
+                flow: None,
                 windows: vec![],
                 widgets: vec![],
                 watches: vec![],
@@ -333,6 +349,7 @@ impl Shared {
 
     pub(crate) fn remove_instance(self: &Arc<Self>, st: &mut State, i: usize) {
         let Some(inst) = st.instances[i].take() else { return };
+        super::flow::mark(st, inst.template);
         for c in inst.cells {
             self.remove_cell(st, c);
         }
@@ -347,6 +364,7 @@ impl Shared {
 
     /// Instance indexes follow the order of the source's children.
     pub(crate) fn reindex(self: &Arc<Self>, st: &mut State, t: usize) {
+        super::flow::mark(st, t); // instances came, went or moved: placed again
         let Some(src) = st.templates[t].source_object else { return };
         let order = self.ds.children(src).unwrap_or_default();
         let mut mine: Vec<usize> = (0..st.instances.len())

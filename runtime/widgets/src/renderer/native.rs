@@ -38,6 +38,18 @@ pub fn draw_native(
         vehicle_list(c, ds, filter, b);
         return;
     }
+    if component == "FlowMore" {
+        // A flowing template's "+N more" (mocu-layout's graph/flow.rs), at the design's
+        // scale as the legend is.
+        let s = props.get("scale").and_then(Value::as_f64).unwrap_or(1.0).max(1.0) as f32;
+        let n = props.get("count").and_then(Value::as_i64).unwrap_or(0);
+        let style = TextStyle::new(12.0 * s, theme::TEXT)
+            .bold()
+            .align(Align::Center)
+            .baseline(Baseline::Middle);
+        c.draw_text(&format!("+{n} more"), Point::new(b.w / 2.0, b.h / 2.0), &style);
+        return;
+    }
     if component == "BindingLegend" {
         // It grows with a design's scale, as the vehicle list does (`paint.rs`).
         let s = props.get("scale").and_then(Value::as_f64).unwrap_or(1.0).max(0.1) as f32;

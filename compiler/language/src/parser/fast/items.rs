@@ -576,6 +576,8 @@ impl<'a> Fast<'a> {
             p.ws();
             p.plain_string()
         });
+        self.ws();
+        let flow = self.attempt(Self::flow_clause);
         self.then(b'{')?;
         self.ws();
         let mut items = Vec::new();
@@ -600,9 +602,35 @@ impl<'a> Fast<'a> {
             var,
             source,
             object_type,
+            flow,
             items: tight(items),
             span: self.here(start),
         }))
+    }
+
+    /// `flow_clause`: `flow DIRECTION rect X Y W H (anchor NAME)? (gap N)?`; as pest, the
+    /// whitespace before an absent option is the clause's.
+    fn flow_clause(&mut self) -> Option<Flow> {
+        let start = self.pos;
+        if !self.word_here(b"flow") {
+            return None;
+        }
+        self.pos += 4;
+        let direction = self.then_ident()?;
+        self.ws();
+        let rect = self.rect_prop()?;
+        self.ws();
+        let anchor = self.attempt(Self::anchor_prop);
+        self.ws();
+        let gap = self.attempt(|p| {
+            if !p.word_here(b"gap") {
+                return None;
+            }
+            p.pos += 3;
+            p.ws();
+            p.number()
+        });
+        Some(Flow { direction, rect, anchor, gap, span: self.here(start) })
     }
 
     /// `action`: `set`, `call`, `swap`, `show`, `hide`, `alert`, `mode` or `select`.
