@@ -149,7 +149,7 @@ fn a_killed_recording_opens_up_to_its_last_complete_chunk_with_the_video_as_rece
     }
     let (topic, video) = r["frames"].as_object().unwrap().iter().next().expect("video recorded");
     assert_eq!(topic, &format!("/video/root.cameras.udp{port}"));
-    assert_eq!(r["channels"][topic]["schema"], "foxglove.CompressedVideo");
+    assert_eq!(r["channels"][topic]["schema"], "foxglove_msgs/msg/CompressedVideo");
     assert_eq!(video["format"], "h264");
     // An access unit as received, in Annex B form: it starts with a start code.
     let head = video["first_bytes_hex"].as_str().unwrap();

@@ -9,8 +9,8 @@
    "attachments": [names],
    "channels": {topic: {"schema", "schema_encoding", "encoding", "count",
                         "monotonic": log_time never decreases,
-                        "decoded": every message decodes (JSON; CDR on /world/values
-                                   and /camera/*),
+                        "decoded": every message decodes (JSON; CDR on /world/values,
+                                   /video/*, /image/* and /camera/*),
                         "first_ns", "last_ns"}},
    "values": int,              # entries in /world/values batches
    "properties": {path: [[log_time_ns, kind, value], ...]},   # for each --property PATH,
@@ -140,6 +140,22 @@ def take(report, schema, channel, message):
                 timestamp_ns=image["timestamp_ns"],
             )
         return
+    if channel.message_encoding == "cdr" and schema and schema.name in COMPRESSED:
+        try:
+            unit = compressed(message.data)
+        except (ValueError, struct.error, UnicodeDecodeError):
+            c["decoded"] = False
+            return
+        fr = report["frames"].setdefault(topic, {"count": 0})
+        fr["count"] += 1
+        if fr["count"] == 1:
+            fr.update(
+                format=unit["format"],
+                first_bytes_hex=unit["data"][:4].hex(),
+                size=len(unit["data"]),
+                timestamp_ns=unit["timestamp_ns"],
+            )
+        return
     if channel.message_encoding == "cdr":
         try:
             entries = property_values(message.data)
@@ -221,6 +237,22 @@ def raw_image(data):
             "height": height, "encoding": encoding, "data": pixels}
 
 
+COMPRESSED = ("foxglove_msgs/msg/CompressedVideo", "foxglove_msgs/msg/CompressedImage")
+
+
+def compressed(data):
+    """A foxglove_msgs/msg/CompressedVideo or CompressedImage with Mocu's unit and arrival_us
+    (CDR; docs/recording.md, /video/* and /image/*)."""
+    c = Cdr(data)
+    sec, nsec = c.u32(), c.u32()
+    frame_id = c.string()
+    payload = c.take(1, c.u32())
+    fmt = c.string()
+    unit, arrival_us = struct.unpack("<qq", c.take(8, 16))
+    return {"timestamp_ns": sec * 1_000_000_000 + nsec, "frame_id": frame_id, "data": payload,
+            "format": fmt, "unit": unit, "arrival_us": arrival_us}
+
+
 def property_values(data):
     """A /world/values batch (mocu_msgs/msg/PropertyValues, CDR little endian; docs/recording.md):
     [(log_time_ns, id, kind, value), ...]."""
@@ -230,8 +262,11 @@ def property_values(data):
     for fmt, size in (("I", 4), ("I", 4), ("I", 4), ("B", 1), ("d", 8)):
         n = c.u32()
         cols.append(struct.unpack(f"<{n}{fmt}", c.take(size, n * size)))
-    ids, _seqs, dts, kinds, values = cols
-    if not len(ids) == len(dts) == len(kinds) == len(values):
+    ids, seqs, dts, kinds, values = cols
+    # Format 3: seq empty when the changes are numbered one after the other, kind empty
+    # when every entry is a float.
+    kinds = kinds or (0,) * len(ids)
+    if not len(ids) == len(dts) == len(kinds) == len(values) or len(seqs) not in (0, len(ids)):
         raise ValueError("columns of different lengths")
     out = []
     for i, kind in enumerate(kinds):

@@ -29,6 +29,14 @@ pub trait Clock: Send + Sync + 'static {
         self.wall()
     }
 
+    /// [`Clock::wall_at`] in nanoseconds since the Unix epoch (0 before it): what the change
+    /// feed stamps with, once per change (the system clock skips the `SystemTime` round trip).
+    fn wall_ns_at(&self, now: Instant) -> u64 {
+        self.wall_at(now).duration_since(UNIX_EPOCH).map_or(0, |d| {
+            d.as_secs().saturating_mul(1_000_000_000).saturating_add(u64::from(d.subsec_nanos()))
+        })
+    }
+
     /// Called once by each DataServer built on this clock. A clock that moves only when
     /// told (a manual clock) keeps `fire` and calls it after every move, and returns true;
     /// the system clock ignores it and returns false (its timers wait on real time).
@@ -51,8 +59,15 @@ impl Clock for SystemClock {
     /// again at most [`OFFSET_FOR`] after it was last read: so it follows the system's clock
     /// being set or slewed within that, and costs no system call otherwise.
     fn wall_at(&self, now: Instant) -> SystemTime {
+        UNIX_EPOCH + Duration::from_nanos(self.wall_ns_at(now))
+    }
+
+    fn wall_ns_at(&self, now: Instant) -> u64 {
         let base = *BASE.get_or_init(Instant::now);
-        let mono = now.saturating_duration_since(base).as_nanos() as i64;
+        let since = now.saturating_duration_since(base);
+        let mono = (since.as_secs() as i64)
+            .saturating_mul(1_000_000_000)
+            .saturating_add(i64::from(since.subsec_nanos()));
         let read = OFFSET_READ_AT.load(Ordering::Relaxed);
         let offset = if read == i64::MIN || !(0..OFFSET_FOR).contains(&(mono - read)) {
             let wall = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
@@ -64,8 +79,7 @@ impl Clock for SystemClock {
         } else {
             OFFSET.load(Ordering::Relaxed)
         };
-        let ns = mono.saturating_add(offset).max(0) as u64;
-        UNIX_EPOCH + Duration::from_nanos(ns)
+        mono.saturating_add(offset).max(0) as u64
     }
 }
 

@@ -33,7 +33,7 @@ pub use call::{Call, Responder};
 pub use clock::{Clock, ManualClock, SystemClock};
 pub use error::{DsError, ObjRef};
 pub use executor::{Executor, Stats};
-pub use feed::{Change, ChangeFeed, FeedWaker, Stamped};
+pub use feed::{Change, ChangeFeed, FeedWaker, NumKind, Numeric, Stamped};
 pub use meta::{ObjectInfo, PropMeta};
 pub use method::{CallMode, CallOptions, CallOutcome, MethodSpec, ParamSpec, WRITE_AT_OWNER};
 pub use mocu_value::{Guid, PropName, Value, ValueKind};

@@ -32,6 +32,8 @@ pub(crate) struct Prop {
     pub(crate) meta: Option<Arc<PropMeta>>,
     /// When the last write arrived (on the server's clock), changing or not.
     pub(crate) received: std::time::Instant,
+    /// Its number in the change feed's numeric lanes (0: not numbered yet).
+    pub(crate) number: u32,
 }
 
 /// Properties kept in creation order, found by a linear scan while few and through an

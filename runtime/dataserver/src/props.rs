@@ -112,13 +112,7 @@ impl DataServer {
         }
         p.value = value.clone();
         // Metadata never changes after creation: a reader has it from `created`.
-        self.emit_at(now, || Change::PropertySet {
-            object: guid,
-            name,
-            value: value.clone(),
-            meta: None,
-            created: false,
-        });
+        self.emit_value(now, guid, name, &mut p.number, &value);
         notify_prop(&os.prop_subs, guid, Kind::Changed, name, Some(value));
         Ok(())
     }
@@ -208,7 +202,7 @@ fn add_prop(
     meta: Option<Arc<PropMeta>>,
     now: Instant,
 ) {
-    os.props.insert(Prop { name, value: value.clone(), meta, received: now });
+    os.props.insert(Prop { name, value: value.clone(), meta, received: now, number: 0 });
     notify_prop(&os.prop_subs, os.self_guid, Kind::New, name, Some(value));
 }
 

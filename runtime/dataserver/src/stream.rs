@@ -224,7 +224,7 @@ impl DataServer {
     pub fn send(&self, listener: Guid, args: Vec<Value>) -> Result<usize, DsError> {
         let l = self.listener(listener)?;
         let msg: Arc<[Value]> = args.into();
-        self.emit(|| crate::feed::Change::Sent { listener, message: msg.clone() });
+        self.emit_sent(listener, &msg);
         let receivers = l.receivers.read().clone();
         let mut sent = 0;
         let mut lost = None;

@@ -7,7 +7,8 @@
 //!
 //! `cargo bench --bench record [-- --warm-up-time 1 --measurement-time 3]`. Under
 //! `cargo test --benches` each runs once and the summary is one second long. Needs ffmpeg
-//! (Debian `ffmpeg`) to encode the camera's frames once at start.
+//! (Debian `ffmpeg`) to encode the camera's frames once at start. `-- profile=baseline` or
+//! `-- profile=recording` runs one of the two alone, for a profiler, with each thread's CPU.
 
 #[path = "../../video/tests/peer/mod.rs"]
 mod peer;
@@ -190,11 +191,50 @@ fn summary(units: &[Arc<[u8]>], seconds: u64) {
         rec_cpu.as_secs_f64() / base_cpu.as_secs_f64()
     );
     eprintln!(
-        "  file       {:8.1} MB per minute ({} messages, {:.1} MB of JSON per minute before LZ4)",
+        "  file       {:8.1} MB per minute ({} messages, {:.1} MB of messages per minute)",
         recorded as f64 / seconds as f64 * 60.0 / 1e6,
         totals.messages,
         totals.bytes as f64 / seconds as f64 * 60.0 / 1e6
     );
+}
+
+/// One of the two alone (`-- profile=baseline` or `-- profile=recording`), five simulated
+/// seconds, for a profiler (`valgrind --tool=callgrind --separate-threads=yes`, `perf`): the
+/// process's CPU per simulated second and, on Linux, each thread's.
+fn profile(units: &[Arc<[u8]>], record: bool) {
+    const SECONDS: u64 = 5;
+    let dir = tempfile::tempdir().unwrap();
+    let mut trial = Trial::new(units);
+    let rec = record.then(|| {
+        Recorder::start(&trial.ds, &dir.path().join("p.mcap"), Header::default()).unwrap()
+    });
+    let before = threads();
+    let d = cpu(&mut trial, rec.as_ref(), SECONDS);
+    let per_s = |ns: u64| ns as f64 / 1e6 / SECONDS as f64;
+    for (name, ns) in threads() {
+        let ran = ns - before.get(&name).copied().unwrap_or(0);
+        if ran > 0 {
+            eprint!("{name} {:.1} ms  ", per_s(ran));
+        }
+    }
+    eprintln!();
+    if let Some(r) = rec {
+        r.finish().unwrap();
+    }
+    eprintln!("{:.1} ms CPU per simulated second", per_s(d.as_nanos() as u64));
+}
+
+/// Each thread's run time (ns, `/proc/self/task/*/schedstat`), by name and id; empty where
+/// there is no /proc.
+fn threads() -> std::collections::BTreeMap<String, u64> {
+    let mut out = std::collections::BTreeMap::new();
+    for t in std::fs::read_dir("/proc/self/task").into_iter().flatten().flatten() {
+        let read = |f: &str| std::fs::read_to_string(t.path().join(f)).unwrap_or_default();
+        let ns = read("schedstat").split(' ').next().and_then(|n| n.parse().ok());
+        let name = format!("{}/{}", read("comm").trim(), t.file_name().to_string_lossy());
+        out.insert(name, ns.unwrap_or(0));
+    }
+    out
 }
 
 fn main() {
@@ -205,6 +245,10 @@ fn main() {
     // `cargo bench` passes --bench; `cargo test --benches` does not (criterion's test mode).
     let quick = !args.iter().any(|a| a == "--bench");
     let units = h264_units();
+    if let Some(which) = args.iter().find_map(|a| a.strip_prefix("profile=")) {
+        profile(&units, which == "recording");
+        return;
+    }
     let mut c = Criterion::default().configure_from_args();
     benches(&mut c, &units);
     summary(&units, if quick { 1 } else { 5 });

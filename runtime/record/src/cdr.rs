@@ -25,6 +25,11 @@ impl<'a> Cdr<'a> {
         self.0.extend_from_slice(&x.to_le_bytes());
     }
 
+    pub fn i64(&mut self, x: i64) {
+        self.align(8);
+        self.0.extend_from_slice(&x.to_le_bytes());
+    }
+
     pub fn u32(&mut self, x: u32) {
         self.align(4);
         self.0.extend_from_slice(&x.to_le_bytes());

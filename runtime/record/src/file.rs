@@ -54,6 +54,8 @@ impl Out {
         let opts = WriteOptions::new()
             .profile("mocu")
             .library(format!("mocu-record {}", env!("CARGO_PKG_VERSION")))
+            // LZ4: about a fifth of the recorder's CPU in a busy trial (docs/recording.md,
+            // "Cost"), but a simulator camera's raw frames shrink 30 times.
             .compression(Some(Compression::Lz4))
             .chunk_size(Some(CHUNK));
         let mut w = opts.create(BufWriter::with_capacity(1 << 16, f)).map_err(err)?;
@@ -77,16 +79,16 @@ impl Out {
         let layout = channel(&mut w, "/layout", schemas::LAYOUT).map_err(err)?;
         let video_schema = w
             .add_schema(
-                "foxglove.CompressedVideo",
-                "jsonschema",
-                schemas::compressed_video().as_bytes(),
+                schemas::COMPRESSED_VIDEO.0,
+                "ros2msg",
+                schemas::COMPRESSED_VIDEO.1.as_bytes(),
             )
             .map_err(err)?;
         let image_schema = w
             .add_schema(
-                "foxglove.CompressedImage",
-                "jsonschema",
-                schemas::compressed_image().as_bytes(),
+                schemas::COMPRESSED_IMAGE.0,
+                "ros2msg",
+                schemas::COMPRESSED_IMAGE.1.as_bytes(),
             )
             .map_err(err)?;
         let raw_image_schema = w
@@ -144,8 +146,8 @@ impl Out {
             return Ok(id);
         }
         let (schema, encoding) = match kind {
-            Dynamic::Video => (self.video_schema, "json"),
-            Dynamic::Image => (self.image_schema, "json"),
+            Dynamic::Video => (self.video_schema, "cdr"),
+            Dynamic::Image => (self.image_schema, "cdr"),
             Dynamic::RawImage => (self.raw_image_schema, "cdr"),
             Dynamic::Location => (self.location_schema, "json"),
         };

@@ -101,7 +101,7 @@ impl Recorder {
         let mut out = file::Out::create(path)?;
         let now = nanos(ds.wall_time());
         let mut meta = BTreeMap::new();
-        meta.insert("format".to_string(), "2".to_string());
+        meta.insert("format".to_string(), "3".to_string());
         meta.insert("command".to_string(), header.command.clone());
         meta.insert("target".to_string(), header.target.clone());
         meta.insert("layout".to_string(), header.layout.clone());
@@ -112,7 +112,7 @@ impl Recorder {
             out.attach("bundle.mocub", "application/x-mocu-bundle", now, b)?;
         }
         out.flush()?;
-        let feed = ds.change_feed();
+        let feed = ds.change_feed_numeric();
         let waker = feed.waker();
         let existing = world::walk(ds);
         let (tx, rx) = crossbeam_channel::unbounded();
@@ -189,21 +189,26 @@ pub(crate) fn nanos(t: SystemTime) -> u64 {
 }
 
 /// How long the writer lets changes gather after it is woken, so that a busy world is
-/// written in batches (one wake-up per batch, not per change).
+/// written in batches (one wake-up per batch, not per change; ten a second when busy).
 const GATHER: Duration = Duration::from_millis(20);
 
-/// Writes every change queued now, then answers a [`Recorder::sync`].
-fn synced(
-    t: &mut translate::Translator,
-    feed: &ChangeFeed,
-    done: Sender<()>,
-) -> Result<(), String> {
-    for c in &feed.take() {
-        t.change(c)?;
+/// The feed's buffers and the writer's, which trade places at each take: neither side
+/// reallocates.
+#[derive(Default)]
+struct Taken {
+    changes: Vec<mocu_dataserver::Stamped>,
+    numeric: Vec<mocu_dataserver::Numeric>,
+}
+
+impl Taken {
+    /// Writes every change queued now.
+    fn write(&mut self, t: &mut translate::Translator, feed: &ChangeFeed) -> Result<(), String> {
+        feed.swap_both(&mut self.changes, &mut self.numeric);
+        let r = t.take(&self.changes, &self.numeric, feed);
+        self.changes.clear();
+        self.numeric.clear();
+        r
     }
-    t.write_values()?;
-    let _ = done.send(());
-    Ok(())
 }
 
 /// The writer thread: changes in batches and events as they come, a flush at most
@@ -218,8 +223,7 @@ fn write_loop(
 ) -> Result<Totals, String> {
     let mut t = translate::Translator::new(out, start, existing)?;
     let mut dirty_since: Option<Instant> = None;
-    // The feed's buffer and ours trade places at each take: neither reallocates.
-    let mut taken = Vec::new();
+    let mut taken = Taken::default();
     loop {
         // Asleep until something comes, or until the open chunk is due on disk.
         let wait = dirty_since.map_or(Duration::from_secs(3600), |d| {
@@ -229,17 +233,18 @@ fn write_loop(
             std::thread::sleep(GATHER);
         }
         let before = t.written();
-        feed.swap(&mut taken);
-        for c in &taken {
-            t.change(c)?;
-        }
-        taken.clear();
+        taken.write(&mut t, &feed)?;
         t.write_values()?;
         let mut open = true;
         loop {
             match events.try_recv() {
                 Ok(Input::Event(e)) => t.event(e)?,
-                Ok(Input::Sync(done)) => synced(&mut t, &feed, done)?,
+                Ok(Input::Sync(done)) => {
+                    // Everything recorded before the sync is handed to the file.
+                    taken.write(&mut t, &feed)?;
+                    t.write_values()?;
+                    let _ = done.send(());
+                }
                 Err(crossbeam_channel::TryRecvError::Empty) => break,
                 Err(crossbeam_channel::TryRecvError::Disconnected) => {
                     open = false;
@@ -258,8 +263,6 @@ fn write_loop(
             dirty_since = None;
         }
     }
-    for c in &feed.take() {
-        t.change(c)?;
-    }
+    taken.write(&mut t, &feed)?;
     t.finish()
 }

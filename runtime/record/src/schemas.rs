@@ -70,23 +70,25 @@ pub(crate) fn snapshot() -> String {
 
 const TIME: &str = r#"{"type":"object","title":"time","properties":{"sec":{"type":"integer","minimum":0},"nsec":{"type":"integer","minimum":0,"maximum":999999999}}}"#;
 
-/// Foxglove's `foxglove.CompressedVideo` (JSON Schema form).
-pub(crate) fn compressed_video() -> String {
-    format!(
-        r#"{{"title":"foxglove.CompressedVideo","description":"A single frame of a compressed video bitstream","type":"object","properties":{{
-"timestamp":{TIME},"frame_id":{{"type":"string"}},
-"data":{{"type":"string","contentEncoding":"base64"}},"format":{{"type":"string"}}}}}}"#
-    )
-}
+/// Foxglove's `foxglove_msgs/msg/CompressedVideo` and `…/CompressedImage` (`ros2msg`, CDR),
+/// with Mocu's `unit` and `arrival_us` after Foxglove's fields.
+pub(crate) const COMPRESSED_VIDEO: (&str, &str) =
+    ("foxglove_msgs/msg/CompressedVideo", COMPRESSED_FIELDS);
+pub(crate) const COMPRESSED_IMAGE: (&str, &str) =
+    ("foxglove_msgs/msg/CompressedImage", COMPRESSED_FIELDS);
+const COMPRESSED_FIELDS: &str = "\
+builtin_interfaces/Time timestamp
+string frame_id
+uint8[] data
+string format
+int64 unit
+int64 arrival_us
 
-/// Foxglove's `foxglove.CompressedImage` (JSON Schema form).
-pub(crate) fn compressed_image() -> String {
-    format!(
-        r#"{{"title":"foxglove.CompressedImage","description":"A compressed image","type":"object","properties":{{
-"timestamp":{TIME},"frame_id":{{"type":"string"}},
-"data":{{"type":"string","contentEncoding":"base64"}},"format":{{"type":"string"}}}}}}"#
-    )
-}
+================================================================================
+MSG: builtin_interfaces/Time
+int32 sec
+uint32 nanosec
+";
 
 /// Foxglove's `foxglove.LocationFix` (JSON Schema form).
 pub(crate) fn location_fix() -> String {
@@ -130,8 +132,6 @@ mod tests {
             super::EVENT.1.to_string(),
             super::LAYOUT.1.to_string(),
             super::snapshot(),
-            super::compressed_video(),
-            super::compressed_image(),
             super::location_fix(),
         ];
         for s in all {

@@ -8,10 +8,12 @@ use crate::{Event, EventTopic, Totals, json, nanos};
 use mocu_dataserver::{CallOutcome, Change, Guid, PropName, Stamped, Value};
 use std::collections::{HashMap, HashSet};
 
+mod lane;
+
 /// A keyframe at least this often (nanoseconds of `log_time`) …
 const SNAPSHOT_NS: u64 = 10_000_000_000;
 /// … or after this many `/world/*` changes, whichever comes first.
-const SNAPSHOT_CHANGES: u64 = 20_000;
+const SNAPSHOT_CHANGES: u64 = 200_000;
 
 /// The most frames a second recorded of a camera that sends pixels (the simulator's):
 /// a frame is written when at least 3/4 of this period has passed since the last one
@@ -37,6 +39,12 @@ pub(crate) struct Translator {
     places: HashMap<Guid, [Option<f64>; 3]>,
     /// When each pixel camera's last recorded frame was sent.
     raw_last: HashMap<Guid, u64>,
+    /// The recording's `id` of each property by the server's number for it in the feed's
+    /// numeric lane (`lane::UNKNOWN` until met).
+    lane: Vec<u32>,
+    /// Listeners to mute (true) or unmute on the feed: cameras whose decoded frames are not
+    /// recorded (their units are), so that the feed does not keep them alive.
+    mute: Vec<(Guid, bool)>,
     last_seq: u64,
     last_time: u64,
     snapshot_time: u64,
@@ -55,6 +63,8 @@ impl Translator {
             skipped: HashSet::new(),
             places: HashMap::new(),
             raw_last: HashMap::new(),
+            lane: Vec::new(),
+            mute: Vec::new(),
             last_seq: 0,
             last_time: start,
             snapshot_time: start,
@@ -114,15 +124,18 @@ impl Translator {
         Ok(())
     }
 
+    /// Whether a keyframe is due before a change at `t` (when there were changes since the
+    /// last one).
+    fn snapshot_due(&self, t: u64) -> bool {
+        t.saturating_sub(self.snapshot_time) >= SNAPSHOT_NS
+            || self.since_snapshot >= SNAPSHOT_CHANGES
+    }
+
     /// Translates one change (by reference: a change is a hundred bytes, and most are
     /// only read).
     pub fn change(&mut self, s: &Stamped) -> Result<(), String> {
         let t = nanos(s.wall);
-        let due = s.seq > 0
-            && self.since_snapshot > 0
-            && (t.saturating_sub(self.snapshot_time) >= SNAPSHOT_NS
-                || self.since_snapshot >= SNAPSHOT_CHANGES);
-        if due {
+        if s.seq > 0 && self.since_snapshot > 0 && self.snapshot_due(t) {
             self.snapshot()?;
         }
         self.last_seq = s.seq;
@@ -188,6 +201,12 @@ impl Translator {
                 self.out.object
             }
             Change::Deleted { object } => {
+                if let Some(o) = self.world.get(object)
+                    && &*o.info.name == "encoded"
+                    && let Some(camera) = o.parent
+                {
+                    self.mute.push((camera, false));
+                }
                 b.extend_from_slice(b"{\"op\":\"deleted\",\"guid\":");
                 json::uint(b, object.get());
                 b.extend_from_slice(b",\"path\":");
@@ -317,7 +336,10 @@ impl Translator {
                 .any(|&c| self.world.get(c).is_some_and(|o| &*o.info.name == "encoded"));
             return match decoded {
                 // A network camera's frames are decoded from its units, which are recorded.
-                true => Ok(()),
+                true => {
+                    self.mute.push((listener, true));
+                    Ok(())
+                }
                 false => self.raw_frame(listener, msg, seq, t),
             };
         }
@@ -331,25 +353,18 @@ impl Translator {
             _ => return Ok(()),
         };
         let ch = self.out.dynamic(kind, &topic)?;
-        let b = &mut self.buf;
-        b.clear();
-        timestamp(b, t);
-        b.extend_from_slice(b",\"frame_id\":");
-        json::string(b, &camera);
-        b.extend_from_slice(b",\"format\":\"");
-        b.extend_from_slice(format.as_bytes());
-        b.extend_from_slice(b"\"");
-        if let Some(Value::Int(u)) = msg.get(2) {
-            b.extend_from_slice(b",\"unit\":");
-            json::int(b, *u);
-        }
-        if let Some(Value::Int(a)) = msg.get(3) {
-            b.extend_from_slice(b",\"arrival_us\":");
-            json::int(b, *a);
-        }
-        b.extend_from_slice(b",\"data\":\"");
-        json::base64(b, data);
-        b.extend_from_slice(b"\"}");
+        let int = |i: usize| match msg.get(i) {
+            Some(&Value::Int(x)) => x,
+            _ => 0,
+        };
+        self.buf.reserve(data.len() + camera.len() + 64);
+        let mut c = crate::cdr::Cdr::start(&mut self.buf);
+        c.time(t);
+        c.string(&camera);
+        c.bytes(data);
+        c.string(format);
+        c.i64(int(2));
+        c.i64(int(3));
         self.out.write(ch, seq, t, &self.buf)?;
         Ok(())
     }

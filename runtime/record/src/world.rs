@@ -5,7 +5,7 @@
 //! keyframe is exactly consistent with the changes before it.
 
 use crate::json;
-use mocu_dataserver::{Guid, ObjectInfo, PropMeta, PropName, Value};
+use mocu_dataserver::{Guid, NumKind, ObjectInfo, PropMeta, PropName, Value};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
@@ -229,6 +229,26 @@ impl World {
         let s = self.slots.get_mut(id as usize)?.as_mut()?;
         s.value = value.clone();
         Some(id)
+    }
+
+    /// The id of a live property.
+    pub fn id(&self, g: Guid, name: PropName) -> Option<u32> {
+        self.ids.get(&(g, name)).copied()
+    }
+
+    /// A new number of live property `id` (from the feed's numeric lane): in place when
+    /// it was a number of that kind already (no value dropped).
+    #[inline]
+    pub fn set_number(&mut self, id: u32, kind: NumKind, bits: u64) {
+        let Some(Some(s)) = self.slots.get_mut(id as usize) else { return };
+        match (&mut s.value, kind) {
+            (Value::Float(x), NumKind::Float) => *x = f64::from_bits(bits),
+            (Value::Int(i), NumKind::Int) => *i = bits as i64,
+            (Value::Bool(b), NumKind::Bool) => *b = bits != 0,
+            (v, NumKind::Float) => *v = Value::Float(f64::from_bits(bits)),
+            (v, NumKind::Int) => *v = Value::Int(bits as i64),
+            (v, NumKind::Bool) => *v = Value::Bool(bits != 0),
+        }
     }
 
     /// The metadata of property `id`, as it was created.

@@ -35,6 +35,11 @@ fn read(path: &std::path::Path) -> Vec<(String, u64, Json)> {
             assert_eq!(m.channel.message_encoding, "cdr");
             assert_eq!(m.channel.schema.as_ref().unwrap().name, "foxglove_msgs/msg/RawImage");
             raw_image(&m.data)
+        } else if topic.starts_with("/video/") || topic.starts_with("/image/") {
+            assert_eq!(m.channel.message_encoding, "cdr");
+            let schema = &m.channel.schema.as_ref().unwrap().name;
+            assert!(schema.starts_with("foxglove_msgs/msg/Compressed"), "{schema}");
+            compressed(&m.data)
         } else {
             serde_json::from_slice(&m.data).unwrap()
         };
@@ -43,35 +48,61 @@ fn read(path: &std::path::Path) -> Vec<(String, u64, Json)> {
     out
 }
 
+/// Little-endian CDR, alignment counted from after the 4-byte header.
+struct Cdr<'a>(&'a [u8], usize);
+
+impl Cdr<'_> {
+    fn new(d: &[u8]) -> Cdr<'_> {
+        assert_eq!(&d[..4], &[0, 1, 0, 0], "little-endian CDR");
+        Cdr(d, 4)
+    }
+    fn take(&mut self, align: usize, n: usize) -> &[u8] {
+        self.1 += (align - (self.1 - 4) % align) % align;
+        self.1 += n;
+        &self.0[self.1 - n..self.1]
+    }
+    fn u32(&mut self) -> u32 {
+        u32::from_le_bytes(self.take(4, 4).try_into().unwrap())
+    }
+    fn i64(&mut self) -> i64 {
+        i64::from_le_bytes(self.take(8, 8).try_into().unwrap())
+    }
+    fn text(&mut self) -> String {
+        let n = self.u32() as usize;
+        let b = self.take(1, n);
+        assert_eq!(b.last(), Some(&0), "a CDR string ends with NUL");
+        String::from_utf8(b[..n - 1].to_vec()).unwrap()
+    }
+    fn bytes(&mut self) -> Vec<u8> {
+        let n = self.u32() as usize;
+        self.take(1, n).to_vec()
+    }
+}
+
 /// A `foxglove_msgs/msg/RawImage` (CDR) as JSON: its fields, the pixels as a list.
 fn raw_image(d: &[u8]) -> Json {
-    struct Cdr<'a>(&'a [u8], usize);
-    impl Cdr<'_> {
-        fn take(&mut self, align: usize, n: usize) -> &[u8] {
-            self.1 += (align - (self.1 - 4) % align) % align;
-            self.1 += n;
-            &self.0[self.1 - n..self.1]
-        }
-        fn u32(&mut self) -> u32 {
-            u32::from_le_bytes(self.take(4, 4).try_into().unwrap())
-        }
-        fn text(&mut self) -> String {
-            let n = self.u32() as usize;
-            let b = self.take(1, n);
-            assert_eq!(b.last(), Some(&0), "a CDR string ends with NUL");
-            String::from_utf8(b[..n - 1].to_vec()).unwrap()
-        }
-    }
-    assert_eq!(&d[..4], &[0, 1, 0, 0], "little-endian CDR");
-    let mut c = Cdr(d, 4);
+    let mut c = Cdr::new(d);
     let (sec, nsec) = (c.u32(), c.u32());
     let frame_id = c.text();
     let (width, height, encoding, step) = (c.u32(), c.u32(), c.text(), c.u32());
-    let n = c.u32() as usize;
-    let data = c.take(1, n).to_vec();
+    let data = c.bytes();
     assert_eq!(c.1, d.len(), "nothing after the data");
     serde_json::json!({"timestamp": {"sec": sec, "nsec": nsec}, "frame_id": frame_id,
         "width": width, "height": height, "encoding": encoding, "step": step, "data": data})
+}
+
+/// A `foxglove_msgs/msg/CompressedVideo` or `…Image` with Mocu's `unit` and `arrival_us`
+/// (CDR) as JSON, the data as a list.
+fn compressed(d: &[u8]) -> Json {
+    let mut c = Cdr::new(d);
+    let (sec, nsec) = (c.u32(), c.u32());
+    let frame_id = c.text();
+    let data = c.bytes();
+    let format = c.text();
+    let (unit, arrival_us) = (c.i64(), c.i64());
+    assert_eq!(c.1, d.len(), "nothing after arrival_us");
+    serde_json::json!({"timestamp": {"sec": sec, "nsec": nsec}, "frame_id": frame_id,
+        "data": data, "format": format, "unit": unit, "arrival_us": arrival_us})
 }
 
 /// A `mocu_msgs/msg/PropertyValues` batch (CDR, docs/recording.md), read as the doc lays it
@@ -92,18 +123,22 @@ fn entries(d: &[u8]) -> Vec<(u64, Json)> {
         let n = u32_(take(4, 4)) as usize;
         cols.push(take(size, n * size).to_vec());
     }
-    let n = cols[3].len();
+    let n = cols[0].len() / 4;
+    // `seq` empty: the entries are changes first_seq + i; `kind` empty: all floats.
+    assert!(cols[1].is_empty() || cols[1].len() == 4 * n);
+    assert!(cols[3].is_empty() || cols[3].len() == n);
     (0..n)
         .map(|i| {
             let w = |c: usize| u32_(&cols[c][4 * i..4 * i + 4]);
+            let seq = if cols[1].is_empty() { i as u32 } else { w(1) };
             let x = f64::from_le_bytes(cols[4][8 * i..8 * i + 8].try_into().unwrap());
-            let (kind, value) = match cols[3][i] {
+            let (kind, value) = match cols[3].get(i).copied().unwrap_or(0) {
                 0 => ("float", Json::from(x)),
                 1 => ("int", Json::from(x as i64)),
                 2 => ("bool", Json::from(x != 0.0)),
                 k => panic!("kind {k}"),
             };
-            let j = serde_json::json!({"id": w(0), "seq": first_seq + u64::from(w(1)),
+            let j = serde_json::json!({"id": w(0), "seq": first_seq + u64::from(seq),
                                        "kind": kind, "value": value});
             (first_ns + u64::from(w(2)), j)
         })
@@ -261,12 +296,16 @@ fn video_units_are_recorded_as_received_and_the_frames_decoded_from_them_are_not
     let video = on(&msgs, "/video/root.cameras.udp5600");
     assert_eq!(video.len(), 1);
     assert_eq!(video[0].2["format"], "h264");
-    assert_eq!(video[0].2["data"], "AAAAAWc=");
+    assert_eq!(video[0].2["data"], serde_json::json!([0, 0, 0, 1, 0x67]));
     assert_eq!(video[0].2["frame_id"], "root.cameras.udp5600");
     assert_eq!(video[0].2["timestamp"], serde_json::json!({"sec": T0, "nsec": 0}));
     let image = on(&msgs, "/image/root.cameras.udp5600");
     assert_eq!(image.len(), 1);
-    assert_eq!((image[0].1, &image[0].2["data"]), (33_000_000, &"/9j/".into()));
+    assert_eq!(
+        (image[0].1, &image[0].2["data"]),
+        (33_000_000, &serde_json::json!([0xff, 0xd8, 0xff]))
+    );
+    assert_eq!((&image[0].2["unit"], &image[0].2["arrival_us"]), (&2.into(), &42.into()));
     assert_eq!(
         msgs.iter().filter(|(t, _, _)| t.starts_with("/video") || t.starts_with("/image")).count(),
         2

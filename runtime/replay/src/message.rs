@@ -134,7 +134,19 @@ pub struct Unit {
 }
 
 impl Unit {
+    /// A unit in CDR (format 3: `foxglove_msgs/msg/CompressedVideo` or `…Image` with
+    /// `unit` and `arrival_us`) or JSON (formats 1 and 2, base64 `data`).
     pub fn parse(data: &[u8]) -> Option<Unit> {
+        if data.get(..2)? == [0, 1] {
+            let mut c = Cdr { data, at: 4 };
+            let (_sec, _nsec) = (c.u32()?, c.u32()?);
+            let camera = c.string()?.to_string();
+            let bytes = c.seq(1)?.to_vec();
+            let format = c.string()?.to_string();
+            let unit = c.u64()? as i64;
+            let arrival_us = c.u64()? as i64;
+            return Some(Unit { camera, format, unit, arrival_us, data: bytes });
+        }
         let j: serde_json::Value = serde_json::from_slice(data).ok()?;
         let s = |k: &str| j.get(k).and_then(|v| v.as_str());
         Some(Unit {
@@ -173,15 +185,20 @@ pub fn values(data: &[u8]) -> Option<Vec<ValueEntry>> {
     let dts = c.seq(4)?;
     let kinds = c.seq(1)?;
     let vals = c.seq(8)?;
-    let n = kinds.len();
-    if ids.len() != 4 * n || seqs.len() != 4 * n || dts.len() != 4 * n || vals.len() != 8 * n {
+    let n = ids.len() / 4;
+    // Format 3: `seq` empty when entry i is change first_seq + i, `kind` empty when all
+    // are floats.
+    let seq_ok = seqs.is_empty() || seqs.len() == 4 * n;
+    let kind_ok = kinds.is_empty() || kinds.len() == n;
+    if ids.len() != 4 * n || !seq_ok || !kind_ok || dts.len() != 4 * n || vals.len() != 8 * n {
         return None;
     }
     let u32_at = |b: &[u8], i: usize| u32::from_le_bytes(b[4 * i..4 * i + 4].try_into().unwrap());
     (0..n)
         .map(|i| {
             let x = f64::from_le_bytes(vals[8 * i..8 * i + 8].try_into().ok()?);
-            let value = match kinds[i] {
+            let seq = if seqs.is_empty() { i as u32 } else { u32_at(seqs, i) };
+            let value = match kinds.get(i).copied().unwrap_or(0) {
                 0 => Value::Float(x),
                 1 => Value::Int(x as i64),
                 2 => Value::Bool(x != 0.0),
@@ -189,7 +206,7 @@ pub fn values(data: &[u8]) -> Option<Vec<ValueEntry>> {
             };
             Some(ValueEntry {
                 id: u32_at(ids, i),
-                seq: first_seq.wrapping_add(u64::from(u32_at(seqs, i))),
+                seq: first_seq.wrapping_add(u64::from(seq)),
                 log_time: first_ns.saturating_add(u64::from(u32_at(dts, i))),
                 value,
             })
