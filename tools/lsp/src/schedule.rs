@@ -24,7 +24,7 @@ impl Default for Timing {
     /// caught whole; a typist's keystrokes, 50 ms or more apart, are each checked, and wait
     /// only the quiet time for it.
     fn default() -> Timing {
-        Timing { quiet: Duration::from_millis(8), longest: Duration::from_millis(100) }
+        Timing { quiet: Duration::from_millis(3), longest: Duration::from_millis(100) }
     }
 }
 
