@@ -138,17 +138,12 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
         }
         match b {
             b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
+                i = line_end(bytes, i);
                 continue;
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
                 let start = i;
-                i += 2;
-                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
-                    i += 1;
-                }
+                i = script_text::comment_close(bytes, i).unwrap_or(bytes.len());
                 if i >= bytes.len() {
                     diags
                         .error(
@@ -401,7 +396,7 @@ fn report_unclosed_string(
     out.broken.push(first..end);
 }
 
-fn line_end(bytes: &[u8], from: usize) -> usize {
+pub(crate) fn line_end(bytes: &[u8], from: usize) -> usize {
     bytes[from..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| from + p)
 }
 

@@ -58,27 +58,30 @@ pub fn body_end(bytes: &[u8], open: usize) -> Result<usize, usize> {
                 }
             }
             b'/' if bytes.get(i + 1) == Some(&b'/') => {
-                while i < bytes.len() && bytes[i] != b'\n' {
-                    i += 1;
-                }
+                i = crate::lexer::line_end(bytes, i);
                 continue;
             }
             b'/' if bytes.get(i + 1) == Some(&b'*') => {
-                let start = i;
-                i += 2;
-                while i < bytes.len() && !(bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/')) {
-                    i += 1;
-                }
-                if i >= bytes.len() {
-                    return Err(start);
-                }
-                i += 1;
+                i = comment_close(bytes, i).ok_or(i)? + 1;
             }
             _ => {}
         }
         i += 1;
     }
     Err(open)
+}
+
+/// At the `/*` at `open`, the offset of the `*` of the `*/` that ends the comment; `None`
+/// when it is never closed (the lexer's comments and a script's are ended alike).
+pub fn comment_close(bytes: &[u8], open: usize) -> Option<usize> {
+    let mut i = open + 2;
+    while i < bytes.len() {
+        if bytes[i] == b'*' && bytes.get(i + 1) == Some(&b'/') {
+            return Some(i);
+        }
+        i += 1;
+    }
+    None
 }
 
 #[cfg(test)]
