@@ -434,9 +434,38 @@ pub fn kind(name: &str) -> Option<&'static ModuleKind> {
         .or_else(|| MODULES.iter().find(|m| m.kind == name))
 }
 
+/// Every kind known: the stock ones, then those a project declared ([`declare`]), each once.
+pub fn kinds() -> Vec<&'static str> {
+    let declared = DECLARED.read().unwrap_or_else(|e| e.into_inner());
+    let mut out: Vec<&'static str> = MODULES.iter().map(|m| m.kind).collect();
+    out.extend(declared.iter().map(|m| m.kind).filter(|k| !MODULES.iter().any(|m| m.kind == *k)));
+    out
+}
+
 impl ModuleKind {
     /// The declaration of one of its keys (or a common key).
     pub fn setting(&self, key: &str) -> Option<&'static Setting> {
         self.settings.iter().chain(COMMON).find(|s| s.name == key)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_kind_a_project_declared_is_listed_and_suggested_with_the_stock_ones() {
+        declare(ModuleKind { kind: "plot_map_t", description: "a test kind", settings: &[] });
+        let all = kinds();
+        assert!(all.contains(&"plot_map_t") && all.contains(&"map_view"), "{all:?}");
+        assert_eq!(all.iter().filter(|k| **k == "plot_map_t").count(), 1);
+        let mut diags = crate::Diagnostics::new();
+        let mut sources = crate::SourceMap::new();
+        let text = "[profile]\nname = \"p\"\nlayouts = []\n\n[modules.p]\nkind = \"plot_mapt\"\n";
+        let loader = crate::MemoryLoader::new().with("project.toml", text);
+        crate::check_profile("project.toml", text.into(), &loader, &mut sources, &mut diags);
+        let help = diags.into_vec().into_iter().find_map(|d| d.help).unwrap_or_default();
+        assert!(help.contains("did you mean `plot_map_t`?"), "{help}");
+        assert!(help.contains("`plot_map_t`;"), "listed last: {help}");
     }
 }

@@ -130,10 +130,10 @@ fn check_modules(parsed: &ProfileFile, text: &str, file: crate::FileId, diags: &
                 .label("unknown module kind")
                 .help(format!(
                     "{}the kinds are {}; a table's kind is its name unless `kind = \"…\"` says otherwise",
-                    crate::diagnostics::did_you_mean(kind_name, modules::MODULES.iter().map(|m| m.kind))
+                    crate::diagnostics::did_you_mean(kind_name, modules::kinds().into_iter())
                         .map(|b| format!("did you mean `{b}`? "))
                         .unwrap_or_default(),
-                    names(modules::MODULES.iter().map(|m| m.kind))
+                    names(modules::kinds().into_iter())
                 ));
             continue;
         };
