@@ -149,7 +149,10 @@ fn a_pymavlink_vehicle_is_discovered_monitored_and_commanded() {
     });
     let info = ds.info(v).unwrap();
     assert_eq!((&*info.kind, &*info.subtype), ("uav", "quadrotor"));
-    let nav = ds.resolve(&["vehicles", "mav7", "nav"]).unwrap();
+    // Its `nav` is made just after it: waited for as the vehicle was.
+    let nav = wait_for(&ds, &[Topic::children(v)], "mav7's nav", || {
+        ds.resolve(&["vehicles", "mav7", "nav"])
+    });
 
     // Telemetry with units.
     wait_for(&ds, &[Topic::properties(nav), Topic::properties(v)], "telemetry", || {

@@ -59,6 +59,9 @@ pub struct ModuleContext {
     /// own statistics.
     pub status: Guid,
     events: Sender<HostEvent>,
+    /// Whether the module panicked, held while `state` is written: a thread of the module
+    /// that panics during `start` is never reported `running` after (see [`Self::mark_running`]).
+    panicked: Arc<parking_lot::Mutex<bool>>,
 }
 
 impl ModuleContext {
@@ -69,7 +72,8 @@ impl ModuleContext {
         status: Guid,
         events: Sender<HostEvent>,
     ) -> ModuleContext {
-        ModuleContext { name: name.into(), ds, executor, status, events }
+        let panicked = Arc::default();
+        ModuleContext { name: name.into(), ds, executor, status, events, panicked }
     }
 
     /// A context outside any host (tests, benchmarks): events are dropped.
@@ -129,9 +133,24 @@ impl ModuleContext {
     }
 
     pub(crate) fn panicked(&self, message: String) {
-        let _ = self.ds.set(self.status, "state", Value::str("panicked"));
+        {
+            let mut panicked = self.panicked.lock();
+            *panicked = true;
+            let _ = self.ds.set(self.status, "state", Value::str("panicked"));
+        }
         let _ = self.ds.set(self.status, "error", Value::str(&message));
         let _ = self.events.send(HostEvent::Panicked { module: self.name.to_string(), message });
+    }
+}
+
+impl ModuleContext {
+    /// Marks the module `running` once its `start` returned, unless one of its threads
+    /// panicked meanwhile (then `panicked` stays).
+    pub(crate) fn mark_running(&self) {
+        let panicked = self.panicked.lock();
+        if !*panicked {
+            let _ = self.ds.set(self.status, "state", Value::str("running"));
+        }
     }
 }
 

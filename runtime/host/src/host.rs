@@ -194,7 +194,7 @@ impl ModuleHost {
                 return Err(StartError::Panicked { module, message });
             }
         }
-        let _ = self.ds.set(status, "state", Value::str("running"));
+        ctx.mark_running();
         let _ = self.tx.send(HostEvent::Started { module, kind: spec.kind.clone() });
         self.running.push(Running { module: m, ctx });
         Ok(())
