@@ -390,9 +390,14 @@ fn an_ocu_shows_the_camera_an_adapter_shares_in_its_video_window() {
     let ocu = Proc::start(&args.iter().map(String::as_str).collect::<Vec<_>>());
     let (out, lines) = ocu.finish();
     assert!(out.status.success(), "the OCU failed:\n{}", lines.join("\n"));
-    // The upper right of the screen, clear of the HUD (as in tests/replay.rs).
-    let sky = sky_share(&shot, (490, 630), (60, 200));
-    assert!(sky > 0.9, "the camera's sky in the video window: {sky:.2} of the pixels");
+    // The upper right of the screen, clear of the HUD and above the horizon whatever the
+    // boat's heading when the run ends (the adapter's simulator runs on the wall clock).
+    let sky = sky_share(&shot, (490, 630), (50, 120));
+    assert!(
+        sky > 0.9,
+        "the camera's sky in the video window: {sky:.2} of the pixels; the OCU said:\n{}",
+        lines.join("\n")
+    );
     drop(adapter);
 }
 
