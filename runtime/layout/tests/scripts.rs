@@ -188,3 +188,25 @@ fn a_reload_stops_the_old_scripts_subscriptions_and_runs_the_new_text() {
     layout.settle();
     assert_eq!(note(&ds, usv1), "new 0.5");
 }
+
+#[test]
+fn a_script_in_a_for_each_template_sees_its_instances_object_as_self() {
+    let ds = DataServer::default();
+    let usv1 = vehicle(&ds, "usv1");
+    let usv2 = vehicle(&ds, "usv2");
+    let p = program(
+        r#"
+use "stdlib/controls.mocu"
+for each v in root.vehicles of type "usv" {
+  window strip { layer 10 rect 0 (index * 40) 200 40 }
+  in strip { mark: Button { at 0 0 100 30  label "MARK"  on press #js: { mocu.write(self + ".note", "marked " + self); } } }
+}
+"#,
+    );
+    let layout = Layout::load(&ds, &p, config(), Arc::new(NullSink)).unwrap();
+    layout.settle();
+    press(&ds, &["display", "strip@usv2", "mark@usv2"]);
+    layout.settle();
+    assert_eq!(note(&ds, usv2), "marked root.vehicles.usv2");
+    assert_eq!(note(&ds, usv1), "", "only the pressed instance's vehicle");
+}
