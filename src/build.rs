@@ -36,12 +36,17 @@ pub fn main(args: BuildArgs) -> ExitCode {
         eprintln!("error: `{path}` has errors; no bundle written");
         return ExitCode::from(1);
     }
-    let Some(bundle) = bundle else {
+    let Some(mut bundle) = bundle else {
         eprintln!(
             "error: `{path}` is a schema; build a profile (.toml with [profile]) or a layout"
         );
         return ExitCode::from(2);
     };
+    // The files its modules name (scripts, map overlays) go in with it.
+    if let Err(e) = crate::bundle_files::collect(&args.profile, &mut bundle) {
+        eprintln!("error: {e}; no bundle written");
+        return ExitCode::from(2);
+    }
     let bytes = mocu_language::bundle::write(&bundle);
     if let Err(e) = std::fs::write(&args.output, &bytes) {
         eprintln!("error: cannot write `{}`: {e}", args.output.display());

@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 
 mod build;
+mod bundle_files;
 mod check;
 mod core_modules;
 mod fmt;

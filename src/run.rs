@@ -87,6 +87,8 @@ pub struct Target {
     pub bundle: mocu_language::Bundle,
     /// The profile's modules, when it names any.
     pub modules: Option<Vec<ModuleSpec>>,
+    /// A bundle's carried files, written out for its modules while the target lives.
+    _carried: Option<crate::bundle_files::Carried>,
 }
 
 /// Why TARGET could not be run.
@@ -111,8 +113,12 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
     if !warnings.trim().is_empty() {
         eprint!("{warnings}");
     }
+    let mut carried = None;
     let modules = match profile_specs(&bundle).map_err(TargetError::Io)? {
         Some(mut specs) => {
+            // A bundle's modules find their files where it writes them (absolute paths,
+            // which the joins below keep).
+            carried = crate::bundle_files::extract(&bundle, &mut specs).map_err(TargetError::Io)?;
             let dir = profile_dir(path);
             for s in specs.iter_mut().filter(|s| s.kind == "map") {
                 resolve_map_files(s, &dir);
@@ -126,7 +132,7 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
         }
         None => None,
     };
-    Ok(Target { bundle, modules })
+    Ok(Target { bundle, modules, _carried: carried })
 }
 
 /// A bundle's profile's modules in start order: their `order` setting, then the core order

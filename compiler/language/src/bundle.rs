@@ -26,6 +26,11 @@ pub struct Bundle {
     pub profile: Option<Profile>,
     pub schema: Schema,
     pub layouts: Vec<Layout>,
+    /// The text files the profile's modules name (a script module's `file`, the map's
+    /// `overlays`), by the path written in the profile: a bundle runs without the sources
+    /// (`mocu build` fills it; `mocu run` hands them to the modules).
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub files: std::collections::BTreeMap<String, String>,
 }
 
 /// One checked layout file, with everything it uses.

@@ -195,7 +195,12 @@ pub fn check_profile(
             }
         }
     }
-    Bundle { profile: Some(parsed.to_profile()), schema: project.schema.for_bundle(), layouts }
+    Bundle {
+        profile: Some(parsed.to_profile()),
+        schema: project.schema.for_bundle(),
+        layouts,
+        files: Default::default(),
+    }
 }
 
 /// Checks one layout against a project (its schemas and settings), or against none.
@@ -214,6 +219,7 @@ pub fn check_layout(
         profile: None,
         schema: p.schema.for_bundle(),
         layouts: vec![Layout { path: path.to_string(), program }],
+        files: Default::default(),
     }
 }
 
