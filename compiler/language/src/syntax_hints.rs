@@ -94,6 +94,33 @@ pub fn inner_item<'a>(item: &'a str, before: &'a str) -> &'a str {
     if crate::parser::ITEM_KEYWORDS.contains(&word) { word } else { item }
 }
 
+/// A script action written without its braces (`#js: mocu.write(…)`) or without the `:` of
+/// its prefix (`#js { … }`).
+fn script_hint(prev: &str, found: &str, after: &str) -> Option<(Option<String>, String)> {
+    fn prefix(w: &str) -> Option<&str> {
+        w.strip_prefix('#').filter(|n| {
+            n.chars().next().is_some_and(|c| c.is_ascii_alphabetic()) && n.chars().all(is_word_char)
+        })
+    }
+    if let Some(engine) = prev.strip_suffix(':').and_then(prefix)
+        && !found.starts_with('{')
+    {
+        return Some((
+            Some(format!("the body of a `#{engine}:` script goes in braces")),
+            format!(
+                "write `#{engine}: {{ … }}`: the script runs from its `{{` to the `}}` that balances it"
+            ),
+        ));
+    }
+    let engine = prefix(found)?;
+    after[found.len()..].trim_start().starts_with('{').then(|| {
+        (
+            Some(format!("a script's prefix ends with `:`: `#{engine}:`")),
+            format!("write `#{engine}: {{ … }}`"),
+        )
+    })
+}
+
 /// A better (message, help) for a syntax error, when the mistake is recognised. `item` is
 /// the keyword of the innermost item ([`inner_item`]), `before` the item's text up to the
 /// error and `after` the rest of it.
@@ -105,6 +132,9 @@ pub fn hint(
     after: &str,
 ) -> Option<(Option<String>, String)> {
     let prev = before.split_whitespace().last().unwrap_or("");
+    if let Some(h) = script_hint(prev, found, after) {
+        return Some(h);
+    }
     // `a: Label { … }` where a widget cannot go: in a window's body or a template's.
     let widget = found == ":" && is_word(prev)
         || is_word(found) && after[found.len()..].trim_start().starts_with(':');
