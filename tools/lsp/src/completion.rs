@@ -71,6 +71,10 @@ pub fn complete(
 ) -> Vec<CompletionItem> {
     let text = index.text(path);
     let before = &text[..offset.min(text.len())];
+    // Inside `#js: { … }`: the script's language.
+    if let Some(engine) = crate::script_completion::engine_at(text, offset) {
+        return crate::script_completion::complete(engine, before);
+    }
     // Inside `use "…`: files and folders.
     if let Some(typed) = crate::use_paths::typed(before) {
         let cursor = crate::text::LineIndex::new(text).position(offset);

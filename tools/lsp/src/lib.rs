@@ -15,6 +15,7 @@ pub mod live;
 pub mod overlay;
 pub mod paths;
 pub mod schedule;
+pub mod script_completion;
 pub mod symbols;
 pub mod text;
 pub mod use_paths;
