@@ -161,8 +161,24 @@ pub fn scan(file: FileId, text: &str, diags: &mut Diagnostics) -> Scan {
             // `#js: { … }`: a script's body is the engine's text, skipped whole (its strings,
             // comments and quotes are the engine's); a colour is not a script.
             b'#' if let Some(open) = script_text::body_open(bytes, i) => {
-                match script_text::body_end(bytes, open) {
-                    Ok(end) => i = end,
+                match script_text::body(bytes, open) {
+                    Ok(script_text::Body { end, too_deep: None }) => i = end,
+                    Ok(script_text::Body { end, too_deep: Some(at) }) => {
+                        diags
+                            .error(
+                                codes::TOO_DEEP,
+                                Span::new(file, at, at + 1),
+                                format!(
+                                    "braces nested deeper than {MAX_NESTING} levels in a script"
+                                ),
+                            )
+                            .label("too deep")
+                            .help(
+                                "split the script into functions, or move it into a script module",
+                            );
+                        out.broken.push(i..end);
+                        i = end;
+                    }
                     Err(at) => {
                         let (what, label) = if at == open {
                             ("this script's `{` is never closed", "unclosed script")

@@ -36,15 +36,35 @@ pub fn prefix(text: &str, hash: usize) -> &str {
 /// of what is never closed (the body's `{`, or a string or comment inside it) at the end of
 /// the text.
 pub fn body_end(bytes: &[u8], open: usize) -> Result<usize, usize> {
+    body(bytes, open).map(|b| b.end)
+}
+
+/// A script body's extent, as [`body_end`] finds it.
+pub struct Body {
+    /// Just after its closing `}`.
+    pub end: usize,
+    /// The first `{` nested deeper than [`crate::lexer::MAX_NESTING`] levels in it (the
+    /// body's own braces counted), if any: the parser's rule for a body recurses on them.
+    pub too_deep: Option<usize>,
+}
+
+/// [`body_end`], with where its braces first nest too deep.
+pub fn body(bytes: &[u8], open: usize) -> Result<Body, usize> {
     let mut depth = 0usize;
+    let mut too_deep = None;
     let mut i = open;
     while i < bytes.len() {
         match bytes[i] {
-            b'{' => depth += 1,
+            b'{' => {
+                depth += 1;
+                if depth > crate::lexer::MAX_NESTING && too_deep.is_none() {
+                    too_deep = Some(i);
+                }
+            }
             b'}' => {
                 depth -= 1;
                 if depth == 0 {
-                    return Ok(i + 1);
+                    return Ok(Body { end: i + 1, too_deep });
                 }
             }
             q @ (b'"' | b'\'' | b'`') => {
@@ -109,6 +129,16 @@ mod tests {
     fn an_unclosed_body_or_string_is_found_where_it_opens() {
         assert_eq!(end("#rhai:\n{ let x = 1;"), Err(7));
         assert_eq!(end("#js: { let s = \"ab }"), Err(15));
+    }
+
+    #[test]
+    fn braces_nested_past_the_limit_are_found_at_the_first_too_deep() {
+        let n = crate::lexer::MAX_NESTING;
+        let t = format!("#js: {}{}", "{".repeat(n + 2), "}".repeat(n + 2));
+        let b = body(t.as_bytes(), 5).ok().expect("closed");
+        assert_eq!((b.end, b.too_deep), (t.len(), Some(5 + n)));
+        let ok = format!("#js: {}{}", "{".repeat(n), "}".repeat(n));
+        assert_eq!(body(ok.as_bytes(), 5).ok().and_then(|b| b.too_deep), None);
     }
 
     #[test]

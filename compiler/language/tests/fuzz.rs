@@ -98,6 +98,14 @@ fn checker_refuses_deep_nesting_without_overflowing_the_stack() {
         format!("let x = {}", "/*".repeat(10_000)),
         format!("let x = {}1{}", "if true then ".repeat(20_000), " else 0".repeat(20_000)),
         format!("let x = {}1", "if a then 1 else ".repeat(20_000)),
+        // A script's body: its braces are the script's, and still bounded.
+        format!(
+            "bind keyboard {{ key n -> #js: {{ {}{} }} }}",
+            "{".repeat(100_000),
+            "}".repeat(100_000)
+        ),
+        format!("bind keyboard {{ key n -> #rhai: {{ {}", "{".repeat(100_000)),
+        format!("bind keyboard {{ key n -> {}", "#js: { ".repeat(20_000)),
     ] {
         check(&text);
     }

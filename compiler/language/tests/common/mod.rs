@@ -132,6 +132,9 @@ pub const TOKENS: &[&str] = &[
     "stdlib/gauges.mocu",
     "\"stdlib/gauges.mocu\"",
     "\"lib.mocu\"",
+    "#js: {",
+    "#rhai: {",
+    "`",
 ];
 
 /// Openers and closers (or postfixes, with no closer) repeated `n` times.
@@ -150,6 +153,7 @@ pub const NESTERS: &[(&str, &str)] = &[
     ("f(", ")"),
     ("/*", ""),
     ("\"", ""),
+    ("#js: {", "}"),
 ];
 
 /// Every layout, stdlib file, syntax and format test and test data file: the seeds of the
