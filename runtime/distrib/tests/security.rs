@@ -173,6 +173,12 @@ fn a_peer_without_a_certificate_of_the_ca_cannot_join_and_an_operator_without_th
     assert_eq!(dm.snapshots(), 0);
     assert!(m.resolve(&["vehicles"]).is_none(), "nothing mirrored by an uncertified peer");
     assert_eq!(dm.session().info().peers_zid().wait().count(), 0, "mallory has no peer");
+    // The adapter lists a peer when its liveliness token comes, which may be after that
+    // peer's snapshot: waited for, each.
+    for name in ["alice", "bob"] {
+        let (_w, alive) = watch(&a, &format!("distrib.peers.{name}.alive"));
+        until(&alive, &format!("the adapter's peer {name}"), &Value::Bool(true));
+    }
     let peers = a.resolve(&["distrib", "peers"]).unwrap();
     let mut seen: Vec<String> =
         a.children(peers).unwrap().iter().map(|g| a.info(*g).unwrap().name.to_string()).collect();
