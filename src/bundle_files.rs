@@ -7,44 +7,51 @@
 use mocu_host::ModuleSpec;
 use std::path::{Path, PathBuf};
 
-/// Each module setting that names a file to carry: (module name, the path as written).
-fn named_files(profile: &mocu_language::profile::Profile) -> Vec<(String, String)> {
-    let mut out = Vec::new();
-    for (name, settings) in &profile.modules {
-        let kind = settings.get("kind").and_then(|k| k.as_str()).unwrap_or(name);
-        match kind {
-            "script" => {
-                if let Some(f) = settings.get("file").and_then(|f| f.as_str()) {
-                    out.push((name.clone(), f.to_string()));
-                }
+/// Every setting of `spec` that names a file, with whether a bundle carries it (text files):
+/// a script module's `file` and the map's `overlays` (carried), the map's `tiles` (not).
+/// The one list of them: `mocu run` resolves these against the profile's folder too.
+pub fn for_each_file(spec: &mut ModuleSpec, mut f: impl FnMut(&mut String, bool)) {
+    match spec.kind.as_str() {
+        "script" => {
+            if let Some(toml::Value::String(s)) = spec.settings.get_mut("file") {
+                f(s, true);
             }
-            "map" => {
-                for f in settings.get("overlays").and_then(|o| o.as_array()).into_iter().flatten() {
-                    if let Some(f) = f.as_str() {
-                        out.push((name.clone(), f.to_string()));
+        }
+        "map" => {
+            if let Some(toml::Value::Array(a)) = spec.settings.get_mut("overlays") {
+                for v in a.iter_mut() {
+                    if let toml::Value::String(s) = v {
+                        f(s, true);
                     }
                 }
             }
-            _ => {}
+            if let Some(toml::Value::String(s)) = spec.settings.get_mut("tiles") {
+                f(s, false);
+            }
         }
+        _ => {}
     }
-    out
 }
 
 /// Reads the files the profile at `profile_path` names into `bundle`. A file that cannot be
 /// read is an error naming the module and the file (the check passed, so it is rare).
 pub fn collect(profile_path: &Path, bundle: &mut mocu_language::Bundle) -> Result<(), String> {
-    let Some(profile) = &bundle.profile else { return Ok(()) };
+    let Some(mut specs) = crate::run::profile_specs(bundle)? else { return Ok(()) };
     let dir = profile_path.parent().unwrap_or(Path::new(""));
-    for (module, file) in named_files(profile) {
+    let (mut named, mut tiles) = (Vec::new(), false);
+    for s in &mut specs {
+        let module = s.name.clone();
+        for_each_file(s, |file, carried| match carried {
+            true => named.push((module.clone(), file.clone())),
+            false => tiles |= !file.is_empty(),
+        });
+    }
+    for (module, file) in named {
         let text = std::fs::read_to_string(dir.join(&file))
             .map_err(|e| format!("module `{module}`: cannot read `{file}`: {e}"))?;
         bundle.files.insert(file, text);
     }
-    if profile.modules.iter().any(|(name, s)| {
-        s.get("kind").and_then(|k| k.as_str()).unwrap_or(name) == "map"
-            && s.get("tiles").and_then(|t| t.as_str()).is_some_and(|t| !t.is_empty())
-    }) {
+    if tiles {
         eprintln!(
             "note: the map's `tiles` is not carried in a bundle: `mocu run` looks for it where the profile says, beside the bundle"
         );
@@ -94,17 +101,12 @@ pub fn extract(
     Ok(Some(carried))
 }
 
-/// Replaces the setting naming `file` (a script's `file`, an entry of `overlays`) by `to`.
+/// Replaces the carried setting naming `file` (a script's `file`, an entry of `overlays`)
+/// by `to`.
 fn point(spec: &mut ModuleSpec, file: &str, to: &str) {
-    let names = |v: &toml::Value| v.as_str() == Some(file);
-    if let Some(v) = spec.settings.get_mut("file")
-        && names(v)
-    {
-        *v = toml::Value::String(to.to_string());
-    }
-    if let Some(toml::Value::Array(a)) = spec.settings.get_mut("overlays") {
-        for v in a.iter_mut().filter(|v| names(v)) {
-            *v = toml::Value::String(to.to_string());
+    for_each_file(spec, |s, carried| {
+        if carried && s == file {
+            *s = to.to_string();
         }
-    }
+    });
 }

@@ -119,14 +119,15 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
             // A bundle's modules find their files where it writes them (absolute paths,
             // which the joins below keep).
             carried = crate::bundle_files::extract(&bundle, &mut specs).map_err(TargetError::Io)?;
+            // The files the modules name, as paths from the working folder (docs/map.md,
+            // docs/scripting.md).
             let dir = profile_dir(path);
-            for s in specs.iter_mut().filter(|s| s.kind == "map") {
-                resolve_map_files(s, &dir);
-            }
-            for s in specs.iter_mut().filter(|s| s.kind == "script") {
-                if let Some(toml::Value::String(f)) = s.settings.get_mut("file") {
-                    *f = dir.join(&*f).to_string_lossy().into_owned();
-                }
+            for s in &mut specs {
+                crate::bundle_files::for_each_file(s, |f, _| {
+                    if !f.is_empty() {
+                        *f = dir.join(&*f).to_string_lossy().into_owned();
+                    }
+                });
             }
             Some(specs)
         }
@@ -170,21 +171,6 @@ fn profile_dir(target: &Path) -> PathBuf {
         return Path::new(&p).parent().map(Path::to_path_buf).unwrap_or_default();
     }
     target.parent().map(Path::to_path_buf).unwrap_or_default()
-}
-
-/// The map module's files as paths from the working folder (docs/map.md).
-fn resolve_map_files(spec: &mut ModuleSpec, dir: &Path) {
-    let abs = |s: &mut String| *s = dir.join(&*s).to_string_lossy().into_owned();
-    if let Some(toml::Value::Array(a)) = spec.settings.get_mut("overlays") {
-        a.iter_mut()
-            .filter_map(|v| if let toml::Value::String(s) = v { Some(s) } else { None })
-            .for_each(abs);
-    }
-    if let Some(toml::Value::String(s)) = spec.settings.get_mut("tiles")
-        && !s.is_empty()
-    {
-        abs(s);
-    }
 }
 
 /// The modules to start: the profile's (minus those the flags turn off), or the defaults;
