@@ -74,6 +74,18 @@ pub struct Inputs<'a> {
 
 /// Runs frames on `display` until `pace` is done or a stop is asked for. `on_event` gets
 /// each host report as it comes, `on_frame` each frame ticked.
+/// The display of a headless run or replay: on the CPU, the window manager's behaviours
+/// left to the `window_manager` module.
+pub fn cpu_display(
+    ds: &DataServer,
+    (w, h): (u32, u32),
+) -> Result<Display, mocu_display::DisplayError> {
+    let options = mocu_display::DisplayOptions::new(w, h)
+        .backend(mocu_display::BackendChoice::Cpu)
+        .without_window_behaviours();
+    Display::new(ds, options)
+}
+
 pub fn run(
     display: &mut Display,
     pace: Pace,
@@ -81,7 +93,7 @@ pub fn run(
     mut on_event: impl FnMut(HostEvent),
     mut on_frame: impl FnMut(&FrameStats),
 ) -> LoopCounters {
-    let period = Duration::from_secs_f64(1.0 / mocu_display::DisplayOptions::new(1, 1).rate);
+    let period = Duration::from_secs_f64(1.0 / mocu_display::DEFAULT_RATE);
     let mut c = LoopCounters::default();
     let mut events = inputs.events.clone();
     let stop = inputs.stop;

@@ -11,7 +11,7 @@
 
 use crate::frames::Pace;
 use mocu_dataserver::{DataServer, Guid, Value};
-use mocu_display::{BackendChoice, Display, DisplayOptions, WindowOptions, run_window};
+use mocu_display::{DisplayOptions, WindowOptions, run_window};
 use mocu_host::{Events, HostEvent, Level, ModuleHost, ModuleSpec};
 use mocu_layout::{EventSink, JsonlLog, LayoutConfig, NullSink};
 use std::io::Write;
@@ -413,12 +413,7 @@ fn run_headless(
     stop: &crate::stop::Stop,
     stepped: Option<&crate::frames::Stepped>,
 ) -> u8 {
-    let mut display = match Display::new(
-        ds,
-        DisplayOptions::new(screen.0, screen.1)
-            .backend(BackendChoice::Cpu)
-            .without_window_behaviours(),
-    ) {
+    let mut display = match crate::frames::cpu_display(ds, screen) {
         Ok(d) => d,
         Err(e) => {
             eprintln!("mocu run: cannot start the display: {e}");

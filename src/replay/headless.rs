@@ -3,7 +3,7 @@
 //! the system's clock). Ends with `--screenshot`, `--expect` and `--dump`.
 
 use super::ReplayArgs;
-use mocu_display::{BackendChoice, Display, DisplayOptions};
+use mocu_display::Display;
 use mocu_replay::Player;
 use std::time::Duration;
 
@@ -12,19 +12,14 @@ use std::time::Duration;
 const LEAD_IN: Duration = Duration::from_secs(2);
 
 pub fn run(player: &mut Player, args: &ReplayArgs, screen: (u32, u32)) -> u8 {
-    let mut display = match Display::new(
-        player.ds(),
-        DisplayOptions::new(screen.0, screen.1)
-            .backend(BackendChoice::Cpu)
-            .without_window_behaviours(),
-    ) {
+    let mut display = match crate::frames::cpu_display(player.ds(), screen) {
         Ok(d) => d,
         Err(e) => {
             eprintln!("mocu replay: cannot start the display: {e}");
             return 2;
         }
     };
-    let period = Duration::from_secs_f64(1.0 / DisplayOptions::new(1, 1).rate);
+    let period = Duration::from_secs_f64(1.0 / mocu_display::DEFAULT_RATE);
     let frame_ns = (period.as_nanos() as f64 * args.speed).round().max(1.0) as u64;
     let (start, end) = (player.start_ns(), player.end_ns());
     let stop = args.to.map_or(end, |t| player.at_secs(t));

@@ -63,6 +63,9 @@ pub enum BackendChoice {
     Auto,
 }
 
+/// Frames (and animation steps) a second unless a display is told otherwise.
+pub const DEFAULT_RATE: f64 = 60.0;
+
 /// How a display starts.
 #[derive(Clone, Debug)]
 pub struct DisplayOptions {
@@ -87,7 +90,7 @@ impl DisplayOptions {
             backend: BackendChoice::Cpu,
             background: BACKGROUND,
             clock: Clock::Real,
-            rate: 60.0,
+            rate: DEFAULT_RATE,
             window_behaviours: true,
         }
     }

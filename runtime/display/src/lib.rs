@@ -45,8 +45,8 @@ pub use canvas::{
 pub use color::Color;
 pub use compose::{CpuCompositor, LayerView};
 pub use display::{
-    BACKGROUND, BackendChoice, ChangeWaiter, Compositor, Counters, Display, DisplayError,
-    DisplayOptions, PointerEvent, ensure_display_object,
+    BACKGROUND, BackendChoice, ChangeWaiter, Compositor, Counters, DEFAULT_RATE, Display,
+    DisplayError, DisplayOptions, PointerEvent, ensure_display_object,
 };
 pub use geom::{IRect, Point, Rect, Size, Transform};
 #[cfg(feature = "gpu")]

@@ -144,7 +144,7 @@ impl Module for WindowManager {
             None => mocu_display::ensure_display_object(&ctx.ds, 1920, 1080)
                 .map_err(|e| e.to_string())?,
         };
-        let rate = mocu_display::DisplayOptions::new(1, 1).rate;
+        let rate = mocu_display::DEFAULT_RATE;
         let b = mocu_display::WindowBehaviours::publish(&ctx.ds, display, rate, self.animate)
             .map_err(|e| e.to_string())?;
         self.running = Some(b);
