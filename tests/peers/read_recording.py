@@ -103,6 +103,14 @@ def linear(f):
             yield schemas.get(ch.schema_id), ch, r
 
 
+def count_frame(report, topic, **first):
+    """Counts a camera frame on `topic`; the first one's description is kept."""
+    fr = report["frames"].setdefault(topic, {"count": 0})
+    fr["count"] += 1
+    if fr["count"] == 1:
+        fr.update(first)
+
+
 def take(report, schema, channel, message):
     c = report["channels"].setdefault(
         channel.topic,
@@ -128,17 +136,16 @@ def take(report, schema, channel, message):
         except (ValueError, struct.error, UnicodeDecodeError):
             c["decoded"] = False
             return
-        fr = report["frames"].setdefault(topic, {"count": 0})
-        fr["count"] += 1
-        if fr["count"] == 1:
-            fr.update(
-                format=image["encoding"],
-                width=image["width"],
-                height=image["height"],
-                first_bytes_hex=image["data"][:4].hex(),
-                size=len(image["data"]),
-                timestamp_ns=image["timestamp_ns"],
-            )
+        count_frame(
+            report,
+            topic,
+            format=image["encoding"],
+            width=image["width"],
+            height=image["height"],
+            first_bytes_hex=image["data"][:4].hex(),
+            size=len(image["data"]),
+            timestamp_ns=image["timestamp_ns"],
+        )
         return
     if channel.message_encoding == "cdr" and schema and schema.name in COMPRESSED:
         try:
@@ -146,15 +153,14 @@ def take(report, schema, channel, message):
         except (ValueError, struct.error, UnicodeDecodeError):
             c["decoded"] = False
             return
-        fr = report["frames"].setdefault(topic, {"count": 0})
-        fr["count"] += 1
-        if fr["count"] == 1:
-            fr.update(
-                format=unit["format"],
-                first_bytes_hex=unit["data"][:4].hex(),
-                size=len(unit["data"]),
-                timestamp_ns=unit["timestamp_ns"],
-            )
+        count_frame(
+            report,
+            topic,
+            format=unit["format"],
+            first_bytes_hex=unit["data"][:4].hex(),
+            size=len(unit["data"]),
+            timestamp_ns=unit["timestamp_ns"],
+        )
         return
     if channel.message_encoding == "cdr":
         try:
