@@ -56,20 +56,28 @@ impl ScriptAction {
         format!("{} script", self.engine)
     }
 
-    /// Runs the body for one event (loading it the first time).
-    pub(crate) fn run(&self, sh: &Arc<Shared>, cx: ActionCtx) {
-        let Some(script) = self.loaded.get_or_init(|| self.load(sh)) else { return };
+    /// Runs the body for one event on the layout's script executor, compiling it there the
+    /// first time: whatever thread fired the event pays neither.
+    pub(crate) fn run(self: &Arc<Self>, sh: &Arc<Shared>, cx: ActionCtx) {
         let path = |g: Option<mocu_value::Guid>| g.map(|g| Value::str(&sh.ds.path_text(g)));
-        let selected = crate::actions::selected_object(&sh.ds);
+        let vars = vec![
+            ("self", path(cx.self_obj.or(cx.instance_object))),
+            ("selected", path(crate::actions::selected_object(&sh.ds))),
+            ("input", cx.input.map(Value::Float)),
+        ];
         sh.sink.record(
             "action",
             &[("kind", Value::str("script")), ("at", Value::str(&self.source.origin.to_string()))],
         );
-        script.run_with(vec![
-            ("self", path(cx.self_obj.or(cx.instance_object))),
-            ("selected", path(selected)),
-            ("input", cx.input.map(Value::Float)),
-        ]);
+        let (me, weak) = (self.clone(), Arc::downgrade(sh));
+        sh.scripts.spawn(move || {
+            let Some(sh) = weak.upgrade() else { return };
+            let Some(script) = me.loaded.get_or_init(|| me.load(&sh)) else { return };
+            if let Err(e) = script.run_here_with(&vars) {
+                // A runaway is stopped already; the error goes where the script's go.
+                script.api().report(&e);
+            }
+        });
     }
 
     fn load(&self, sh: &Arc<Shared>) -> Option<Script> {

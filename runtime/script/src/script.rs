@@ -62,17 +62,6 @@ impl Script {
         });
     }
 
-    /// Runs the script's text on its executor with these variables set (a layout action's
-    /// `self`, `selected`, `input`); an error is reported as [`Script::run`]'s is.
-    pub fn run_with(&self, vars: Vec<(&'static str, Option<Value>)>) {
-        let me = self.clone();
-        self.api.executor().spawn(move || {
-            if let Err(e) = me.run_here_with(&vars) {
-                me.api.fail(&e);
-            }
-        });
-    }
-
     /// Runs the script's text on this thread (tests, benchmarks, a layout's action already
     /// on its executor); the caller gets the error (a runaway has stopped the script).
     pub fn run_here(&self) -> Result<(), ScriptError> {
