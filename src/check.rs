@@ -124,7 +124,7 @@ pub fn main(args: CheckArgs) -> ExitCode {
         if project.is_none() {
             unchecked.push(path.clone());
         }
-        mocu_language::check_layout(
+        mocu_language::lint_in_project(
             &path,
             text,
             &FsLoader,

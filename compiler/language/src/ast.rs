@@ -23,8 +23,9 @@ pub enum Item {
     Component(Component),
     Bind(Bind),
     Menu(Menu),
-    Watch(Watch),
-    Each(Each),
+    /// Boxed, as `Each`: the largest items, and the rarest, so that every item is not their size.
+    Watch(Box<Watch>),
+    Each(Box<Each>),
     Design(Design),
 }
 

@@ -360,7 +360,8 @@ impl Shift for Item {
                 entries.shift(d, f);
                 span.shift(d, f);
             }
-            Item::Watch(Watch { name, when, hold, clear, repeat, actions, span }) => {
+            Item::Watch(w) => {
+                let Watch { name, when, hold, clear, repeat, actions, span } = &mut **w;
                 name.shift(d, f);
                 when.shift(d, f);
                 hold.shift(d, f);
@@ -369,7 +370,8 @@ impl Shift for Item {
                 actions.shift(d, f);
                 span.shift(d, f);
             }
-            Item::Each(Each { var, source, object_type, flow, items, span }) => {
+            Item::Each(e) => {
+                let Each { var, source, object_type, flow, items, span } = &mut **e;
                 var.shift(d, f);
                 source.shift(d, f);
                 object_type.shift(d, f);

@@ -25,6 +25,7 @@ pub mod format;
 pub mod fs;
 pub mod incremental;
 pub mod lexer;
+pub mod lint;
 pub mod modules;
 pub mod parser;
 pub mod passes;
@@ -119,15 +120,11 @@ pub fn compile_modules(
     // 4. Type and lower to the program; needs resolution and the schema's path types.
     let mut program = check_types::check_types(modules, &defs, schema, diags);
     program.design = check_anchors::check_anchors(modules, diags);
-    // 5. Schema rules need complete, typed paths (after lets are inlined).
-    check_schema::check_schema(&program, schema, diags);
-    check_method_args::check_method_args(&program, schema, diags);
-    check_depth::check_depth(&program, diags);
-    // 6. Warnings last: they only make sense on a program that resolved and typed.
+    // 5. Schema rules need complete, typed paths (after lets are inlined); warnings last:
+    //    they only make sense on a program that resolved and typed.
+    check_program(&program, schema, diags);
     warn_unused::warn_unused(modules, &used, diags);
     warn_outside_window::warn_outside_window(&program, config.screen, diags);
-    check_anchors::warn_screen_px(&program, diags);
-    warn_constant_watch::warn_constant_watch(&program, diags);
     program
 }
 
@@ -220,6 +217,39 @@ pub fn check_layout(
         schema: p.schema.for_bundle(),
         layouts: vec![Layout { path: path.to_string(), program }],
         files: Default::default(),
+    }
+}
+
+/// What `mocu check` runs on one layout: the diagnostics of [`check_layout`], without
+/// building the program, holding one batch of the layout's items at a time
+/// ([`lint::lint_layout`]).
+pub fn lint_in_project(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    project: Option<&project::Project>,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) {
+    let default = project::Project::default();
+    let p = project.unwrap_or(&default);
+    lint::lint_layout(path, text, loader, &p.schema, &p.config, sources, diags);
+}
+
+/// [`check_path`]'s diagnostics, a layout checked by [`lint_in_project`] (what `mocu check
+/// FILE` does).
+pub fn lint_path(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) {
+    if file_kind(path, &text) == FileKind::Layout {
+        let project = project_of(path, None, loader, sources, diags);
+        lint_in_project(path, text, loader, project.as_ref(), sources, diags);
+    } else {
+        check_path(path, text, loader, sources, diags);
     }
 }
 

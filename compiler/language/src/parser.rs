@@ -50,62 +50,144 @@ pub fn parse_counted(file: FileId, text: &str, diags: &mut Diagnostics) -> (File
     let chunks = split_items(text);
     let mut items = Vec::with_capacity(chunks.len());
     for chunk in chunks {
-        if scan.is_broken(chunk.start..chunk.end) {
-            items.extend(broken_let(file, text, &chunk));
-            continue;
-        }
-        match chunk.kind {
-            ChunkKind::Stray => {
-                let word = first_word(&text[chunk.start..chunk.end]);
-                diags
-                    .error(codes::STRAY_TEXT, Span::new(file, chunk.start, chunk.start + word.len()), format!("`{word}` is not the start of an item"))
-                    .label("expected an item here")
-                    .help(crate::syntax_hints::stray(word).unwrap_or_else(|| "a file is made of `use`, `let`, `window`, `in`, `component`, `bind`, `menu`, `watch` and `for each` items".into()));
-            }
-            // An unclosed comment or string after it took the rest of the file: said there.
-            ChunkKind::Unclosed(open)
-                if scan.broken.iter().any(|b| b.start > open && b.end >= text.len()) => {}
-            ChunkKind::Unclosed(open) => {
-                diags
-                    .error(
-                        codes::UNCLOSED,
-                        Span::new(file, open, open + 1),
-                        "this `{` is never closed",
-                    )
-                    .label("unclosed")
-                    .help("add the matching `}` before the next item");
-            }
-            ChunkKind::Item => {
-                let src = &text[chunk.start..chunk.end];
-                if let Some(item) = fast::parse_item(file, src, chunk.start) {
-                    counts.fast += 1;
-                    items.push(item);
-                    continue;
+        parse_chunk(file, text, &scan, &chunk, diags, &mut counts, &mut items);
+    }
+    (File { items }, counts)
+}
+
+/// The items of a file that [`parse_resident`] left for later, read in order by
+/// [`parse_later`].
+#[derive(Debug)]
+pub struct Deferred {
+    scan: crate::lexer::Scan,
+    /// Their chunks, in file order.
+    pub chunks: Vec<Chunk>,
+}
+
+impl Deferred {
+    /// The chunks in runs of about `bytes` of source each (at least one chunk a run).
+    pub fn batches(&self, bytes: usize) -> impl Iterator<Item = &[Chunk]> {
+        let mut rest = &self.chunks[..];
+        std::iter::from_fn(move || {
+            let first = rest.first()?;
+            let n = rest.iter().take_while(|c| c.end - first.start <= bytes).count().max(1);
+            let (run, tail) = rest.split_at(n);
+            rest = tail;
+            Some(run)
+        })
+    }
+}
+
+/// [`parse`] for a check that reads a file in batches (`crate::lint`): the items that other
+/// items name (`use`, `let`, `window`, `for each`, `design`) are read now; `in`, `bind`,
+/// `menu` and `watch` items, which nothing names, are left for [`parse_later`]; a `component`
+/// is read now without its body (its parameters are what widgets need) and again, whole,
+/// later. Every syntax error is reported once, by whichever read comes first.
+pub fn parse_resident(file: FileId, text: &str, diags: &mut Diagnostics) -> (File, Deferred) {
+    let scan = crate::lexer::scan(file, text, diags);
+    let mut counts = ParseCounts::default();
+    let mut items = Vec::new();
+    let mut later = Vec::new();
+    for chunk in split_items(text) {
+        let whole =
+            matches!(chunk.kind, ChunkKind::Item) && !scan.is_broken(chunk.start..chunk.end);
+        match first_word(&text[chunk.start..chunk.end]) {
+            "in" | "bind" | "menu" | "watch" if whole => later.push(chunk),
+            "component" if whole => {
+                let n = items.len();
+                parse_chunk(file, text, &scan, &chunk, diags, &mut counts, &mut items);
+                if items.len() > n
+                    && let Some(Item::Component(c)) = items.last_mut()
+                {
+                    c.body = Vec::new();
+                    later.push(chunk);
                 }
-                counts.reference += 1;
-                match parse_item(file, src, chunk.start) {
-                    Parsed::Item(item) => items.push(*item),
-                    Parsed::Nothing => {}
-                    Parsed::TooDeep(span) => {
-                        items.extend(broken_let(file, text, &chunk));
-                        diags
-                            .error(
-                                codes::TOO_DEEP,
-                                span,
-                                format!("this expression is nested deeper than {MAX_DEPTH} levels"),
-                            )
-                            .label("too deep")
-                            .help("split it with `let`s");
-                    }
-                    Parsed::Error(e) => {
-                        report_pest_error(file, text, chunk.start, src, &e, diags);
-                        items.extend(broken_let(file, text, &chunk));
-                    }
+            }
+            _ => parse_chunk(file, text, &scan, &chunk, diags, &mut counts, &mut items),
+        }
+    }
+    items.shrink_to_fit();
+    later.shrink_to_fit();
+    (File { items }, Deferred { scan, chunks: later })
+}
+
+/// Reads chunks that [`parse_resident`] left (a component's again, whole).
+pub fn parse_later(
+    file: FileId,
+    text: &str,
+    deferred: &Deferred,
+    chunks: &[Chunk],
+    diags: &mut Diagnostics,
+) -> Vec<Item> {
+    let mut counts = ParseCounts::default();
+    let mut items = Vec::with_capacity(chunks.len());
+    for chunk in chunks {
+        parse_chunk(file, text, &deferred.scan, chunk, diags, &mut counts, &mut items);
+    }
+    items
+}
+
+/// Reads one chunk of the file into `items` (none when it is broken or not an item; a
+/// broken `let` still defines its name), reporting its syntax errors.
+fn parse_chunk(
+    file: FileId,
+    text: &str,
+    scan: &crate::lexer::Scan,
+    chunk: &Chunk,
+    diags: &mut Diagnostics,
+    counts: &mut ParseCounts,
+    items: &mut Vec<Item>,
+) {
+    if scan.is_broken(chunk.start..chunk.end) {
+        items.extend(broken_let(file, text, chunk));
+        return;
+    }
+    match chunk.kind {
+        ChunkKind::Stray => {
+            let word = first_word(&text[chunk.start..chunk.end]);
+            diags
+                .error(codes::STRAY_TEXT, Span::new(file, chunk.start, chunk.start + word.len()), format!("`{word}` is not the start of an item"))
+                .label("expected an item here")
+                .help(crate::syntax_hints::stray(word).unwrap_or_else(|| "a file is made of `use`, `let`, `window`, `in`, `component`, `bind`, `menu`, `watch` and `for each` items".into()));
+        }
+        // An unclosed comment or string after it took the rest of the file: said there.
+        ChunkKind::Unclosed(open)
+            if scan.broken.iter().any(|b| b.start > open && b.end >= text.len()) => {}
+        ChunkKind::Unclosed(open) => {
+            diags
+                .error(codes::UNCLOSED, Span::new(file, open, open + 1), "this `{` is never closed")
+                .label("unclosed")
+                .help("add the matching `}` before the next item");
+        }
+        ChunkKind::Item => {
+            let src = &text[chunk.start..chunk.end];
+            if let Some(item) = fast::parse_item(file, src, chunk.start) {
+                counts.fast += 1;
+                items.push(item);
+                return;
+            }
+            counts.reference += 1;
+            match parse_item(file, src, chunk.start) {
+                Parsed::Item(item) => items.push(*item),
+                Parsed::Nothing => {}
+                Parsed::TooDeep(span) => {
+                    items.extend(broken_let(file, text, chunk));
+                    diags
+                        .error(
+                            codes::TOO_DEEP,
+                            span,
+                            format!("this expression is nested deeper than {MAX_DEPTH} levels"),
+                        )
+                        .label("too deep")
+                        .help("split it with `let`s");
+                }
+                Parsed::Error(e) => {
+                    report_pest_error(file, text, chunk.start, src, &e, diags);
+                    items.extend(broken_let(file, text, chunk));
                 }
             }
         }
     }
-    (File { items }, counts)
 }
 
 /// One item chunk (`src`, at `offset` in the file) read by the fast parser (parser/fast.rs):

@@ -187,7 +187,7 @@ impl Ctx {
                     }
                 }
                 let when = when.unwrap_or(Expr { kind: ExprKind::Bool(false), span });
-                Item::Watch(Watch { name, when, hold, clear, repeat, actions, span })
+                Item::Watch(Box::new(Watch { name, when, hold, clear, repeat, actions, span }))
             }
             Rule::each_item => {
                 let var = self.next_ident(&mut inner, span);
@@ -207,7 +207,7 @@ impl Ctx {
                         _ => items.push(self.item(q)),
                     }
                 }
-                Item::Each(Each { var, source, object_type, flow, items, span })
+                Item::Each(Box::new(Each { var, source, object_type, flow, items, span }))
             }
             _ => Item::Let(Let {
                 name: Ident { name: String::new(), span },

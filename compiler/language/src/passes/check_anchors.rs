@@ -62,7 +62,8 @@ fn size(e: &ast::Expr, diags: &mut Diagnostics) -> Option<f64> {
     }
 }
 
-fn anchors(item: &Item, diags: &mut Diagnostics) {
+/// E0213 and E0215 in one item: its anchors and its `flow`.
+pub fn anchors(item: &Item, diags: &mut Diagnostics) {
     match item {
         Item::Window(w) => anchor(w.anchor.as_ref(), diags),
         Item::In(b) => b.widgets.iter().for_each(|w| anchor(w.anchor.as_ref(), diags)),

@@ -35,31 +35,94 @@ pub fn check_types(
     schema: &Schema,
     diags: &mut Diagnostics,
 ) -> Program {
-    let mut t = Typer {
-        modules,
-        defs,
-        schema,
-        diags,
-        top_lets: FastMap::default(),
-        lets_lowered: vec![0; modules.len()],
-        lets: Vec::new(),
-        program: Program::default(),
-        mode_refs: Vec::new(),
-        signatures: FastMap::default(),
-    };
+    let (program, carry) = type_modules(modules, defs, schema, None, diags);
+    report_unknown_modes(carry.mode_refs, &declared_modes(&program.bindings), diags);
+    program
+}
+
+/// What typing carries from one batch of the layout's items to the next (`crate::lint`):
+/// the checked top-level `let`s, the program's `let`s, and the `mode` actions seen so far.
+#[derive(Default)]
+pub struct Carry {
+    top_lets: FastMap<DefId, Expr>,
+    lets_lowered: Vec<usize>,
+    lets: Vec<LetRef>,
+    mode_refs: Vec<(String, Span)>,
+}
+
+impl Carry {
+    /// Reports the `mode` actions seen that no `bind` block declares (`declared`: every
+    /// mode of the program's bindings, in program order).
+    pub fn report_unknown_modes(self, declared: &[String], diags: &mut Diagnostics) {
+        report_unknown_modes(self.mode_refs, declared, diags);
+    }
+}
+
+/// [`check_types`] for a check in batches (`crate::lint`): the program of everything but the
+/// layout's components and the items [`crate::parser::parse_resident`] left for later, which
+/// [`check_types_items`] types; modes are reported by [`Carry::report_unknown_modes`].
+pub fn check_types_resident(
+    modules: &Modules,
+    defs: &Definitions,
+    schema: &Schema,
+    diags: &mut Diagnostics,
+) -> (Program, Carry) {
+    type_modules(modules, defs, schema, Some(0), diags)
+}
+
+/// Types items of the layout (module 0) that are not in its tree: the program of just these
+/// (its `lets` are the `let`s they made), `carry` updated.
+pub fn check_types_items(
+    modules: &Modules,
+    defs: &Definitions,
+    schema: &Schema,
+    carry: &mut Carry,
+    items: &[Item],
+    diags: &mut Diagnostics,
+) -> Program {
+    let before = carry.lets.len();
+    let mut t = Typer::new(modules, defs, schema, diags, std::mem::take(carry));
+    let base = Scope::default();
+    let mut sink = Sink::default();
+    for item in items {
+        t.item(item, &base, &mut sink);
+    }
+    let (mut program, mut back) = t.finish();
+    program.windows = sink.windows;
+    program.widgets = sink.widgets;
+    program.watches = sink.watches;
+    program.lets = Lets(back.lets.split_off(before));
+    *carry = back;
+    program
+}
+
+/// The modes that `bind` blocks declare, in program order (with repeats).
+pub fn declared_modes(bindings: &[Binding]) -> Vec<String> {
+    bindings.iter().filter_map(|b| b.mode.clone()).collect()
+}
+
+fn type_modules(
+    modules: &Modules,
+    defs: &Definitions,
+    schema: &Schema,
+    skip_components_of: Option<ModuleId>,
+    diags: &mut Diagnostics,
+) -> (Program, Carry) {
+    let carry = Carry { lets_lowered: vec![0; modules.len()], ..Carry::default() };
+    let mut t = Typer::new(modules, defs, schema, diags, carry);
+    t.skip_components_of = skip_components_of;
     t.program.files = modules.iter().map(|m| m.path.clone()).collect();
     for m in 0..modules.len() {
         t.module(m);
     }
-    t.check_modes();
-    t.program.lets = Lets(t.lets);
-    let p = &mut t.program;
-    p.windows.shrink_to_fit();
-    p.widgets.shrink_to_fit();
-    p.components.shrink_to_fit();
-    p.bindings.shrink_to_fit();
-    p.watches.shrink_to_fit();
-    t.program
+    let (mut program, carry) = t.finish();
+    program.lets = Lets(carry.lets.clone());
+    program.windows.shrink_to_fit();
+    program.widgets.shrink_to_fit();
+    program.components.shrink_to_fit();
+    program.bindings.shrink_to_fit();
+    program.watches.shrink_to_fit();
+    (program, carry)
 }
 
 #[derive(Clone, Default)]
@@ -97,6 +160,8 @@ struct Typer<'a, 'd> {
     /// Each component's signature, worked out once per module that uses it (its defaults
     /// lowered once, not once per widget).
     signatures: FastMap<(ModuleId, &'a str), Option<Rc<Signature<'a>>>>,
+    /// A module whose components are typed elsewhere ([`check_types_items`]).
+    skip_components_of: Option<ModuleId>,
 }
 
 /// Where windows, widgets and watches go: the program, or a template.
@@ -119,6 +184,41 @@ fn mk(ty: Type, node: Node, span: Span) -> Expr {
     Expr { ty, node, span }
 }
 
+impl<'a, 'd> Typer<'a, 'd> {
+    fn new(
+        modules: &'a Modules,
+        defs: &'a Definitions,
+        schema: &'a Schema,
+        diags: &'d mut Diagnostics,
+        carry: Carry,
+    ) -> Typer<'a, 'd> {
+        Typer {
+            modules,
+            defs,
+            schema,
+            diags,
+            top_lets: carry.top_lets,
+            lets_lowered: carry.lets_lowered,
+            lets: carry.lets,
+            program: Program::default(),
+            mode_refs: carry.mode_refs,
+            signatures: FastMap::default(),
+            skip_components_of: None,
+        }
+    }
+
+    /// The program so far, and what the next batch needs.
+    fn finish(self) -> (Program, Carry) {
+        let carry = Carry {
+            top_lets: self.top_lets,
+            lets_lowered: self.lets_lowered,
+            lets: self.lets,
+            mode_refs: self.mode_refs,
+        };
+        (self.program, carry)
+    }
+}
+
 impl<'a> Typer<'a, '_> {
     fn module(&mut self, m: ModuleId) {
         let base = Scope { module: m, ..Scope::default() };
@@ -138,7 +238,10 @@ impl<'a> Typer<'a, '_> {
         sink.widgets
             .reserve_exact(count(|i| if let Item::In(b) = i { b.widgets.len() } else { 0 }));
         sink.watches.reserve_exact(count(|i| usize::from(matches!(i, Item::Watch(_)))));
-        p.components.reserve_exact(count(|i| usize::from(matches!(i, Item::Component(_)))));
+        let skip = self.skip_components_of == Some(m);
+        if !skip {
+            p.components.reserve_exact(count(|i| usize::from(matches!(i, Item::Component(_)))));
+        }
         p.menus.reserve_exact(count(|i| usize::from(matches!(i, Item::Menu(_)))));
         p.bindings.reserve_exact(count(|i| match i {
             Item::Bind(b) => b.bindings.len() + b.modes.iter().map(|m| m.1.len()).sum::<usize>(),
@@ -149,7 +252,9 @@ impl<'a> Typer<'a, '_> {
                 // Checked even when unused; uses refer to this result.
                 self.lower_top_let(DefId { module: m, item: i, inner: None });
             }
-            self.item(item, &base, &mut sink);
+            if !(skip && matches!(item, Item::Component(_))) {
+                self.item(item, &base, &mut sink);
+            }
         }
         self.program.windows = sink.windows;
         self.program.widgets = sink.widgets;
@@ -417,5 +522,6 @@ impl<'a> Typer<'a, '_> {
 mod actions;
 mod components;
 mod exprs;
+use components::report_unknown_modes;
 pub use exprs::parse_spec;
 use exprs::{read_as, want_text};

@@ -6,6 +6,7 @@ use super::{DefId, Definitions, FastMap, Modules};
 use crate::ast::{Ident, Item};
 use crate::codes;
 use crate::diagnostics::Diagnostics;
+use crate::source::Span;
 
 pub fn collect_definitions<'a>(modules: &'a Modules, diags: &mut Diagnostics) -> Definitions {
     let mut defs = Definitions::default();
@@ -14,7 +15,7 @@ pub fn collect_definitions<'a>(modules: &'a Modules, diags: &mut Diagnostics) ->
         let mut components = FastMap::default();
         let mut windows = FastMap::default();
         // Per kind (let, component, window, watch): where each name was first defined.
-        let mut spans: [FastMap<&str, crate::source::Span>; 4] = Default::default();
+        let mut spans: [FastMap<&str, Span>; 4] = Default::default();
         let mut add = |kind: usize,
                        table: &mut FastMap<String, DefId>,
                        name: &'a Ident,
@@ -57,7 +58,7 @@ pub fn collect_definitions<'a>(modules: &'a Modules, diags: &mut Diagnostics) ->
 /// Adds a top-level name to its table, or reports it as defined twice (`spans`: where each
 /// name of its kind was first defined).
 fn add_name<'a>(
-    spans: &mut FastMap<&'a str, crate::source::Span>,
+    spans: &mut FastMap<&'a str, Span>,
     table: &mut FastMap<String, DefId>,
     name: &'a Ident,
     id: DefId,
@@ -68,17 +69,37 @@ fn add_name<'a>(
         return;
     }
     if let Some(first) = spans.get(name.name.as_str()) {
-        diags
-            .error(
-                codes::DUPLICATE,
-                name.span,
-                format!("the {what} `{}` is defined twice", name.name),
-            )
-            .label("second definition")
-            .related(*first, "first defined here")
-            .help("rename one of them; the first definition is used");
+        report_duplicate(name, *first, what, diags);
         return;
     }
     spans.insert(&name.name, name.span);
     table.insert(name.name.clone(), id);
+}
+
+fn report_duplicate(name: &Ident, first: Span, what: &str, diags: &mut Diagnostics) {
+    diags
+        .error(codes::DUPLICATE, name.span, format!("the {what} `{}` is defined twice", name.name))
+        .label("second definition")
+        .related(first, "first defined here")
+        .help("rename one of them; the first definition is used");
+}
+
+/// The layout's watch names so far, for a check that reads its watches in batches
+/// (`crate::lint`): [`collect_definitions`] sees no watch of the layout there.
+#[derive(Default)]
+pub struct WatchNames(FastMap<String, Span>);
+
+impl WatchNames {
+    /// Adds a watch's name, or reports it as defined twice.
+    pub fn add(&mut self, name: &Ident, diags: &mut Diagnostics) {
+        if name.name.is_empty() {
+            return;
+        }
+        match self.0.get(name.name.as_str()) {
+            Some(first) => report_duplicate(name, *first, "watch", diags),
+            None => {
+                self.0.insert(name.name.clone(), name.span);
+            }
+        }
+    }
 }

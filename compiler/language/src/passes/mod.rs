@@ -17,9 +17,24 @@ pub mod warn_outside_window;
 pub mod warn_unused;
 
 use crate::ast;
+use crate::diagnostics::Diagnostics;
+use crate::program::Program;
+use crate::schema::Schema;
 use crate::source::FileId;
 use std::collections::{HashMap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
+
+/// The passes over the typed program that look at each of its parts on its own (so that
+/// `crate::lint` runs them on a batch's program too): schema rules (they need complete,
+/// typed paths, after `let`s are inlined), method arguments, depth once `let`s are put in
+/// place, screen px in a design, constant watches.
+pub fn check_program(program: &Program, schema: &Schema, diags: &mut Diagnostics) {
+    check_schema::check_schema(program, schema, diags);
+    check_method_args::check_method_args(program, schema, diags);
+    check_depth::check_depth(program, diags);
+    check_anchors::warn_screen_px(program, diags);
+    warn_constant_watch::warn_constant_watch(program, diags);
+}
 
 /// A hash map for the checker's own tables, keyed by names, spans and pointers: hashed with
 /// [`FastHasher`] (no defence against chosen collisions is needed for a layout's names,

@@ -18,6 +18,25 @@ type ParamsAndEvents<'a> = (Vec<(&'a str, bool)>, Vec<&'a str>);
 pub type UsedLets = super::FastSet<crate::source::Span>;
 
 pub fn resolve_names(modules: &Modules, defs: &Definitions, diags: &mut Diagnostics) -> UsedLets {
+    resolve_modules(modules, defs, None, diags)
+}
+
+/// [`resolve_names`] for a check in batches (`crate::lint`): the layout's components (read
+/// without bodies so far) are left for [`resolve_items`].
+pub fn resolve_resident(
+    modules: &Modules,
+    defs: &Definitions,
+    diags: &mut Diagnostics,
+) -> UsedLets {
+    resolve_modules(modules, defs, Some(0), diags)
+}
+
+fn resolve_modules(
+    modules: &Modules,
+    defs: &Definitions,
+    skip_components_of: Option<ModuleId>,
+    diags: &mut Diagnostics,
+) -> UsedLets {
     let mut r = Resolver {
         modules,
         defs,
@@ -26,9 +45,32 @@ pub fn resolve_names(modules: &Modules, defs: &Definitions, diags: &mut Diagnost
         signatures: Default::default(),
     };
     for m in 0..modules.len() {
-        r.module(m);
+        r.module(m, skip_components_of == Some(m));
     }
     r.used
+}
+
+/// Resolves items of the layout (module 0) that are not in its tree (a batch of
+/// `crate::lint`), adding the `let`s they read to `used`.
+pub fn resolve_items(
+    modules: &Modules,
+    defs: &Definitions,
+    items: &[Item],
+    used: &mut UsedLets,
+    diags: &mut Diagnostics,
+) {
+    let mut r = Resolver {
+        modules,
+        defs,
+        diags,
+        used: std::mem::take(used),
+        signatures: Default::default(),
+    };
+    let base = Scope::default();
+    for item in items {
+        r.item(item, &base, None);
+    }
+    *used = r.used;
 }
 
 struct Resolver<'a, 'd> {
@@ -62,10 +104,12 @@ impl<'a> Scope<'a> {
 }
 
 impl<'a> Resolver<'a, '_> {
-    fn module(&mut self, m: ModuleId) {
+    fn module(&mut self, m: ModuleId, skip_components: bool) {
         let base = Scope { module: m, ..Scope::default() };
         for (i, item) in self.modules[m].ast.items.iter().enumerate() {
-            self.item(item, &base, Some(i));
+            if !(skip_components && matches!(item, Item::Component(_))) {
+                self.item(item, &base, Some(i));
+            }
         }
     }
 

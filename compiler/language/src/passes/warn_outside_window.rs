@@ -8,11 +8,11 @@ use crate::program::*;
 
 pub fn warn_outside_window(program: &Program, screen: (f64, f64), diags: &mut Diagnostics) {
     let scale = crate::placement::scale(program.design, screen);
-    check(&program.windows, &program.widgets, screen, scale, diags);
+    warn_widgets_outside(&program.windows, &program.widgets, screen, scale, diags);
     for t in &program.templates {
         let mut windows = t.windows.clone();
         windows.extend(program.windows.iter().cloned());
-        check(&windows, &t.widgets, screen, scale, diags);
+        warn_widgets_outside(&windows, &t.widgets, screen, scale, diags);
     }
 }
 
@@ -22,42 +22,62 @@ fn length(b: &Bound, full: f64, scale: f64) -> Option<f64> {
     Some(if b.expr.ty.unit() == Some("%") { v / 100.0 * full } else { v * scale })
 }
 
-fn check(
+/// W0003 for `widgets` placed in `windows` (the first of each name), on a `screen` at `scale`.
+pub fn warn_widgets_outside(
     windows: &[Window],
     widgets: &[Widget],
     screen: (f64, f64),
     scale: f64,
     diags: &mut Diagnostics,
 ) {
-    // By name, the first of each (as a search would find): searching the list for every
-    // widget made 100,000-line layouts quadratic.
-    let mut by_name: std::collections::HashMap<&str, &Window> = Default::default();
-    for x in windows {
-        by_name.entry(x.name.as_str()).or_insert(x);
+    WindowSizes::of(windows, screen, scale).warn_widgets_outside(widgets, screen, scale, diags);
+}
+
+/// Each window's size in screen px where it is constant, by name (the first window of each
+/// name, as a search would find): what W0003 needs of the windows, kept by `crate::lint`
+/// while the program they came from is dropped.
+#[derive(Default)]
+pub struct WindowSizes(super::FastMap<String, Option<(f64, f64)>>);
+
+impl WindowSizes {
+    pub fn of(windows: &[Window], screen: (f64, f64), scale: f64) -> WindowSizes {
+        let mut sizes = WindowSizes::default();
+        for x in windows {
+            sizes.0.entry(x.name.clone()).or_insert_with(|| {
+                Some((
+                    x.rect.get(2).and_then(|b| length(b, screen.0, scale))?,
+                    x.rect.get(3).and_then(|b| length(b, screen.1, scale))?,
+                ))
+            });
+        }
+        sizes
     }
-    for w in widgets {
-        let Some(win) = by_name.get(w.window.as_str()).copied() else { continue };
-        let (Some(ww), Some(wh)) = (
-            win.rect.get(2).and_then(|b| length(b, screen.0, scale)),
-            win.rect.get(3).and_then(|b| length(b, screen.1, scale)),
-        ) else {
-            continue;
-        };
-        // `%` in a widget's `at` is of the screen, as at run time.
-        let get = |i: usize, full: f64| w.at.get(i).and_then(|b| length(b, full, scale));
-        let (Some(ox), Some(oy)) = (get(0, screen.0), get(1, screen.1)) else { continue };
-        let (sw, sh) = (get(2, screen.0).unwrap_or(1.0), get(3, screen.1).unwrap_or(1.0));
-        let x = crate::placement::place(w.anchor.h, ww, ox, sw);
-        let y = crate::placement::place(w.anchor.v, wh, oy, sh);
-        if x >= ww || y >= wh || x + sw <= 0.0 || y + sh <= 0.0 {
-            let name = w.name.clone().unwrap_or_else(|| w.component.clone());
-            diags
+
+    /// W0003 for `widgets` placed in these windows.
+    pub fn warn_widgets_outside(
+        &self,
+        widgets: &[Widget],
+        screen: (f64, f64),
+        scale: f64,
+        diags: &mut Diagnostics,
+    ) {
+        for w in widgets {
+            let Some(Some((ww, wh))) = self.0.get(w.window.as_str()).copied() else { continue };
+            // `%` in a widget's `at` is of the screen, as at run time.
+            let get = |i: usize, full: f64| w.at.get(i).and_then(|b| length(b, full, scale));
+            let (Some(ox), Some(oy)) = (get(0, screen.0), get(1, screen.1)) else { continue };
+            let (sw, sh) = (get(2, screen.0).unwrap_or(1.0), get(3, screen.1).unwrap_or(1.0));
+            let x = crate::placement::place(w.anchor.h, ww, ox, sw);
+            let y = crate::placement::place(w.anchor.v, wh, oy, sh);
+            if x >= ww || y >= wh || x + sw <= 0.0 || y + sh <= 0.0 {
+                let name = w.name.clone().unwrap_or_else(|| w.component.clone());
+                diags
                 .warning(
                     codes::OUTSIDE_WINDOW,
                     w.span,
                     format!(
                         "`{name}` at ({x}, {y}) is wholly outside the window `{}` ({ww} × {wh} px)",
-                        win.name
+                        w.window
                     ),
                 )
                 .help(if w.anchor.is_default() {
@@ -68,6 +88,7 @@ fn check(
                         w.anchor.name()
                     )
                 });
+            }
         }
     }
 }

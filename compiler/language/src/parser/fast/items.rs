@@ -559,7 +559,7 @@ impl<'a> Fast<'a> {
         let actions = self.actions()?;
         self.then(b'}')?;
         let span = self.here(start);
-        Some(Item::Watch(Watch { name, when, hold, clear, repeat, actions, span }))
+        Some(Item::Watch(Box::new(Watch { name, when, hold, clear, repeat, actions, span })))
     }
 
     fn each_item(&mut self) -> Option<Item> {
@@ -598,14 +598,14 @@ impl<'a> Fast<'a> {
             item.map(|i| items.push(i)).is_some()
         });
         self.then(b'}')?;
-        Some(Item::Each(Each {
+        Some(Item::Each(Box::new(Each {
             var,
             source,
             object_type,
             flow,
             items: tight(items),
             span: self.here(start),
-        }))
+        })))
     }
 
     /// `flow_clause`: `flow DIRECTION rect X Y W H (anchor NAME)? (gap N)?`; as pest, the

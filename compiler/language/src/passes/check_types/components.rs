@@ -110,6 +110,7 @@ impl<'a> Typer<'a, '_> {
             program: Program::default(),
             mode_refs: Vec::new(),
             signatures: std::mem::take(&mut self.signatures),
+            skip_components_of: self.skip_components_of,
         };
         let r = f(&mut t);
         self.signatures = t.signatures;
@@ -356,22 +357,24 @@ impl<'a> Typer<'a, '_> {
         }
         (event, hold_ms, sh)
     }
+}
 
-    /// Every `mode NAME` action names a mode some `bind` block declares.
-    pub(super) fn check_modes(&mut self) {
-        let declared: Vec<String> =
-            self.program.bindings.iter().filter_map(|b| b.mode.clone()).collect();
-        for (m, span) in std::mem::take(&mut self.mode_refs) {
-            if !declared.contains(&m) {
-                let d = self.diags.error(
-                    codes::UNKNOWN_MODE,
-                    span,
-                    format!("no `bind` block declares a mode `{m}`"),
-                );
-                d.suggest(&m, declared.iter().map(String::as_str));
-                if d.help.is_none() {
-                    d.help("declare it with `mode NAME { bindings… }` inside a `bind` block");
-                }
+/// E0212: `mode NAME` actions (`refs`) that no `bind` block declares.
+pub(super) fn report_unknown_modes(
+    refs: Vec<(String, Span)>,
+    declared: &[String],
+    diags: &mut Diagnostics,
+) {
+    for (m, span) in refs {
+        if !declared.contains(&m) {
+            let d = diags.error(
+                codes::UNKNOWN_MODE,
+                span,
+                format!("no `bind` block declares a mode `{m}`"),
+            );
+            d.suggest(&m, declared.iter().map(String::as_str));
+            if d.help.is_none() {
+                d.help("declare it with `mode NAME { bindings… }` inside a `bind` block");
             }
         }
     }
