@@ -108,7 +108,7 @@ pub fn main(args: CheckArgs) -> ExitCode {
             if kind == FileKind::Profile {
                 scripts::check(&path, &text, &mut sources, &mut diags);
             }
-            mocu_language::check_path(&path, text, &FsLoader, &mut sources, &mut diags);
+            mocu_language::lint_path(&path, text, &FsLoader, &mut sources, &mut diags);
             continue;
         }
         let profile = explicit.clone().or_else(|| project::discover(&path, &FsLoader));

@@ -162,14 +162,56 @@ pub fn check_profile(
     sources: &mut SourceMap,
     diags: &mut Diagnostics,
 ) -> Bundle {
-    let project = project::load(path, &text, loader, sources, diags);
+    let mut layouts = Vec::new();
+    let project =
+        with_profile_layouts(path, text, loader, sources, diags, &mut |l, p, t, pr, s, d| {
+            let program = compile_layout(p, t, loader, &pr.schema, &pr.config, s, d);
+            layouts.push(Layout { path: l.to_string(), program });
+        });
     let Some(parsed) = &project.file else { return Bundle::default() };
+    Bundle {
+        profile: Some(parsed.to_profile()),
+        schema: project.schema.for_bundle(),
+        layouts,
+        files: Default::default(),
+    }
+}
+
+/// What `mocu check` runs on a profile: the diagnostics of [`check_profile`], each layout
+/// checked by [`lint::lint_layout`] (no program built).
+pub fn lint_profile(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+) {
+    with_profile_layouts(path, text, loader, sources, diags, &mut |_, p, t, pr, s, d| {
+        lint::lint_layout(p, t, loader, &pr.schema, &pr.config, s, d);
+    });
+}
+
+/// A layout of a profile: as the profile names it, its resolved path, its text, the project.
+type ProfileLayout<'a> =
+    dyn FnMut(&str, &str, String, &project::Project, &mut SourceMap, &mut Diagnostics) + 'a;
+
+/// Loads and checks a profile (its schemas and module settings), then hands each layout it
+/// names to `each`; a layout that cannot be found or read is reported. Returns the project.
+fn with_profile_layouts(
+    path: &str,
+    text: String,
+    loader: &dyn SourceLoader,
+    sources: &mut SourceMap,
+    diags: &mut Diagnostics,
+    each: &mut ProfileLayout<'_>,
+) -> project::Project {
+    let project = project::load(path, &text, loader, sources, diags);
+    let Some(parsed) = &project.file else { return project };
     let file = sources.find(path).unwrap_or_else(|| sources.add(path.to_string(), text.clone()));
     let span_of = |needle: &str| {
         let at = text.find(&format!("\"{needle}\"")).unwrap_or(0);
         Span::new(file, at, at + needle.len() + 2)
     };
-    let mut layouts = Vec::new();
     for l in &parsed.profile.layouts {
         let Some(p) = loader.resolve(path, l) else {
             diags
@@ -178,11 +220,7 @@ pub fn check_profile(
             continue;
         };
         match loader.read(&p) {
-            Ok(t) => {
-                let program =
-                    compile_layout(&p, t, loader, &project.schema, &project.config, sources, diags);
-                layouts.push(Layout { path: l.clone(), program });
-            }
+            Ok(t) => each(l, &p, t, &project, sources, diags),
             Err(e) => {
                 diags.error(
                     codes::FILE_NOT_FOUND,
@@ -192,12 +230,7 @@ pub fn check_profile(
             }
         }
     }
-    Bundle {
-        profile: Some(parsed.to_profile()),
-        schema: project.schema.for_bundle(),
-        layouts,
-        files: Default::default(),
-    }
+    project
 }
 
 /// Checks one layout against a project (its schemas and settings), or against none.
@@ -236,7 +269,7 @@ pub fn lint_in_project(
     lint::lint_layout(path, text, loader, &p.schema, &p.config, sources, diags);
 }
 
-/// [`check_path`]'s diagnostics, a layout checked by [`lint_in_project`] (what `mocu check
+/// [`check_path`]'s diagnostics, layouts checked by [`lint::lint_layout`] (what `mocu check
 /// FILE` does).
 pub fn lint_path(
     path: &str,
@@ -245,11 +278,15 @@ pub fn lint_path(
     sources: &mut SourceMap,
     diags: &mut Diagnostics,
 ) {
-    if file_kind(path, &text) == FileKind::Layout {
-        let project = project_of(path, None, loader, sources, diags);
-        lint_in_project(path, text, loader, project.as_ref(), sources, diags);
-    } else {
-        check_path(path, text, loader, sources, diags);
+    match file_kind(path, &text) {
+        FileKind::Layout => {
+            let project = project_of(path, None, loader, sources, diags);
+            lint_in_project(path, text, loader, project.as_ref(), sources, diags);
+        }
+        FileKind::Profile => lint_profile(path, text, loader, sources, diags),
+        FileKind::Schema | FileKind::OtherToml => {
+            check_path(path, text, loader, sources, diags);
+        }
     }
 }
 

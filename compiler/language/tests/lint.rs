@@ -121,6 +121,43 @@ fn check_in_batches_reports_what_the_whole_compile_reports_for_every_corpus_file
 }
 
 #[test]
+fn checking_a_profile_in_batches_reports_what_compiling_it_reports() {
+    let mut profiles = Vec::new();
+    for dir in ["../../layouts", "../../examples", "tests/syntax", "../../tests"] {
+        toml_files(std::path::Path::new(dir), &mut profiles);
+    }
+    let profiles: Vec<_> = profiles
+        .into_iter()
+        .filter(|(p, t)| mocu_language::file_kind(p, t) == mocu_language::FileKind::Profile)
+        .collect();
+    assert!(profiles.len() >= 5, "too few profiles: {}", profiles.len());
+    for (path, text) in &profiles {
+        let mut sources = SourceMap::new();
+        let mut diags = Diagnostics::new();
+        mocu_language::check_profile(path, text.clone(), &FsLoader, &mut sources, &mut diags);
+        let want = seen(&sources, diags);
+        let mut sources = SourceMap::new();
+        let mut diags = Diagnostics::new();
+        mocu_language::lint_profile(path, text.clone(), &FsLoader, &mut sources, &mut diags);
+        assert_eq!(seen(&sources, diags), want, "{path}: `mocu check` differs");
+    }
+}
+
+fn toml_files(dir: &std::path::Path, out: &mut Vec<(String, String)>) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    let mut paths: Vec<_> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    paths.sort();
+    for p in paths {
+        if p.is_dir() {
+            toml_files(&p, out);
+        } else if p.extension().is_some_and(|e| e == "toml") {
+            let text = std::fs::read_to_string(&p).unwrap_or_default();
+            out.push((p.to_string_lossy().replace('\\', "/"), text));
+        }
+    }
+}
+
+#[test]
 fn check_in_batches_reports_what_the_whole_compile_reports_for_a_large_layout() {
     let text = layout_corpus::generate(2_000);
     // A few mistakes spread over the file, for diagnostics in many batches.
