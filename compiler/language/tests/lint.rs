@@ -27,21 +27,22 @@ fn files() -> &'static [(String, String)] {
             "../../tests",
             "../../runtime/widgets/tests",
         ] {
-            walk(std::path::Path::new(dir), &mut out);
+            walk(std::path::Path::new(dir), "mocu", &mut out);
         }
         assert!(out.len() > 40, "the corpus is missing: {} files", out.len());
         out
     })
 }
 
-fn walk(dir: &std::path::Path, out: &mut Vec<(String, String)>) {
+/// The files under `dir` whose extension is `ext`, with their paths, in path order.
+fn walk(dir: &std::path::Path, ext: &str, out: &mut Vec<(String, String)>) {
     let Ok(rd) = std::fs::read_dir(dir) else { return };
     let mut paths: Vec<_> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
     paths.sort();
     for p in paths {
         if p.is_dir() {
-            walk(&p, out);
-        } else if p.extension().is_some_and(|e| e == "mocu") {
+            walk(&p, ext, out);
+        } else if p.extension().is_some_and(|e| e == ext) {
             let bytes = std::fs::read(&p).unwrap_or_default();
             let path = p.to_string_lossy().replace('\\', "/");
             out.push((path, String::from_utf8_lossy(&bytes).into_owned()));
@@ -124,7 +125,7 @@ fn check_in_batches_reports_what_the_whole_compile_reports_for_every_corpus_file
 fn checking_a_profile_in_batches_reports_what_compiling_it_reports() {
     let mut profiles = Vec::new();
     for dir in ["../../layouts", "../../examples", "tests/syntax", "../../tests"] {
-        toml_files(std::path::Path::new(dir), &mut profiles);
+        walk(std::path::Path::new(dir), "toml", &mut profiles);
     }
     let profiles: Vec<_> = profiles
         .into_iter()
@@ -140,20 +141,6 @@ fn checking_a_profile_in_batches_reports_what_compiling_it_reports() {
         let mut diags = Diagnostics::new();
         mocu_language::lint_profile(path, text.clone(), &FsLoader, &mut sources, &mut diags);
         assert_eq!(seen(&sources, diags), want, "{path}: `mocu check` differs");
-    }
-}
-
-fn toml_files(dir: &std::path::Path, out: &mut Vec<(String, String)>) {
-    let Ok(rd) = std::fs::read_dir(dir) else { return };
-    let mut paths: Vec<_> = rd.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    paths.sort();
-    for p in paths {
-        if p.is_dir() {
-            toml_files(&p, out);
-        } else if p.extension().is_some_and(|e| e == "toml") {
-            let text = std::fs::read_to_string(&p).unwrap_or_default();
-            out.push((p.to_string_lossy().replace('\\', "/"), text));
-        }
     }
 }
 
