@@ -9,7 +9,7 @@
 //! baseline of as many independent `let`s (each built on `a0` only), in the same run.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use mocu_language::{Diagnostics, MemoryLoader, SourceMap};
+use mocu_language::{Diagnostics, SourceMap};
 use std::hint::black_box;
 
 #[path = "common/layout_corpus.rs"]
@@ -49,9 +49,7 @@ fn lets_layout(n: usize, chained: bool, twice: bool) -> String {
 }
 
 fn bench_lets(c: &mut Criterion, name: &str, n: usize, twice: bool) {
-    let loader = MemoryLoader::new()
-        .with("stdlib/gauges.mocu", include_str!("../stdlib/gauges.mocu"))
-        .with("stdlib/theme.mocu", include_str!("../stdlib/theme.mocu"));
+    let loader = layout_corpus::stdlib_loader();
     let check = |text: &String| {
         let mut sources = SourceMap::new();
         let mut diags = Diagnostics::new();
@@ -70,9 +68,7 @@ fn bench_lets(c: &mut Criterion, name: &str, n: usize, twice: bool) {
 
 fn bench_size(c: &mut Criterion, lines: usize) {
     let text = generate(lines);
-    let loader = MemoryLoader::new()
-        .with("stdlib/gauges.mocu", include_str!("../stdlib/gauges.mocu"))
-        .with("stdlib/theme.mocu", include_str!("../stdlib/theme.mocu"));
+    let loader = layout_corpus::stdlib_loader();
     let mut g = c.benchmark_group(format!("check_{}k_lines", lines / 1000));
     g.throughput(Throughput::Bytes(text.len() as u64));
     g.sample_size(10);

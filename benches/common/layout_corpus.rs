@@ -30,3 +30,11 @@ pub fn generate(lines: usize) -> String {
     }
     s
 }
+
+/// The standard library files the generated layout uses, for a check that reads no disk.
+#[allow(dead_code)] // Not every file that includes this module checks.
+pub fn stdlib_loader() -> mocu_language::MemoryLoader {
+    mocu_language::MemoryLoader::new()
+        .with("stdlib/gauges.mocu", include_str!("../../stdlib/gauges.mocu"))
+        .with("stdlib/theme.mocu", include_str!("../../stdlib/theme.mocu"))
+}

@@ -20,9 +20,7 @@ use layout_corpus::generate;
 fn main() {
     let lines: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10_000);
     let text = generate(lines);
-    let loader = mocu_language::MemoryLoader::new()
-        .with("stdlib/gauges.mocu", include_str!("../../../stdlib/gauges.mocu"))
-        .with("stdlib/theme.mocu", include_str!("../../../stdlib/theme.mocu"));
+    let loader = layout_corpus::stdlib_loader();
     // `mocu check` first, in a process that has not checked anything yet (freed memory that
     // the allocator keeps would hide the resident set's rise).
     let input = text.clone();

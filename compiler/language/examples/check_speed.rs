@@ -23,9 +23,7 @@ use layout_corpus::generate;
 fn main() {
     let lines: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10_000);
     let text = generate(lines);
-    let loader = mocu_language::MemoryLoader::new()
-        .with("stdlib/gauges.mocu", include_str!("../../../stdlib/gauges.mocu"))
-        .with("stdlib/theme.mocu", include_str!("../../../stdlib/theme.mocu"));
+    let loader = layout_corpus::stdlib_loader();
     let runs = if lines > 50_000 { 3 } else { 11 };
     let mut scan = Vec::new();
     let mut check = Vec::new();

@@ -23,9 +23,7 @@ fn main() {
     let lines: usize = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(10_000);
     let runs: usize = std::env::args().nth(2).and_then(|a| a.parse().ok()).unwrap_or(11);
     let text = layout_corpus::generate(lines);
-    let loader = mocu_language::MemoryLoader::new()
-        .with("stdlib/gauges.mocu", include_str!("../../../stdlib/gauges.mocu"))
-        .with("stdlib/theme.mocu", include_str!("../../../stdlib/theme.mocu"));
+    let loader = layout_corpus::stdlib_loader();
     let mut sources = mocu_language::SourceMap::new();
     let mut diags = mocu_language::Diagnostics::new();
     let modules = load_sources::load_sources("bench.mocu", text, &loader, &mut sources, &mut diags);
