@@ -7,7 +7,7 @@
 //! `window_manager` module; its frame loop — paint calls, damage, compositing — stays the
 //! display's (`mocu_display::Display`), which `mocu run` drives itself.
 
-use mocu_host::{ModuleHost, ModuleSpec, Registry};
+use mocu_host::{ModuleHost, ModuleSpec};
 
 /// The display's modules, in the order they start (after every other module but process
 /// modules): each claims its own windows of `root.display`.
@@ -17,22 +17,7 @@ pub const DISPLAY_ROLES: &[&str] = &["window_manager", "widgets", "map_view", "v
 pub const CORE_ROLES: &[&str] =
     &["input", "window_manager", "widgets", "map_view", "video_windows"];
 
-/// The module kinds this binary knows. A project replaces one by registering its own under
-/// the same kind, or adds a kind and names it in a role (`[modules.map_view] kind = "…"`).
-/// The widget renderer draws with `components` (the layouts' compiled components).
-pub fn registry(components: mocu_widgets::Components) -> Registry {
-    let mut r = Registry::new();
-    mocu_sim::register(&mut r);
-    mocu_mavlink::register(&mut r);
-    mocu_video::register(&mut r);
-    mocu_input::register(&mut r);
-    mocu_distrib::register(&mut r);
-    mocu_mapdata::register(&mut r);
-    mocu_script::register(&mut r);
-    mocu_host::register_process(&mut r);
-    mocu_widgets::register(&mut r, components);
-    r
-}
+pub use crate::registry::registry;
 
 /// Whether a module fills one of `roles` (named after it, or of its kind).
 pub fn in_role(spec: &ModuleSpec, roles: &[&str]) -> bool {

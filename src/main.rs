@@ -18,6 +18,7 @@ mod logger;
 mod lsp;
 mod process_modules;
 mod record;
+mod registry;
 mod replay;
 mod run;
 mod serve;

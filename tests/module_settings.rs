@@ -6,18 +6,12 @@ use mocu_dataserver::DataServer;
 use mocu_host::{ModuleHost, ModuleSpec, Registry};
 use mocu_language::modules::{self, SettingType};
 
+/// The binary's own list of module kinds.
+#[path = "../src/registry.rs"]
+mod registry;
+
 fn registry() -> Registry {
-    let mut r = Registry::new();
-    mocu_sim::register(&mut r);
-    mocu_mavlink::register(&mut r);
-    mocu_video::register(&mut r);
-    mocu_input::register(&mut r);
-    mocu_distrib::register(&mut r);
-    mocu_mapdata::register(&mut r);
-    mocu_script::register(&mut r);
-    mocu_host::register_process(&mut r);
-    mocu_widgets::register(&mut r, mocu_widgets::Components::default());
-    r
+    registry::registry(mocu_widgets::Components::default())
 }
 
 /// A valid value of each declared setting (ranges and formats the modules check).
