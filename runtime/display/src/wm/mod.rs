@@ -23,109 +23,19 @@ use std::sync::Arc;
 use std::time::Duration;
 use tiny_skia::Pixmap;
 
+mod pointer;
+mod props;
+mod watch;
+
+pub use pointer::Hit;
+pub use props::WinProps;
+use props::{Effect, apply_prop};
+use watch::on_child;
+
 /// The object type of a window.
 pub const WINDOW_TYPE: &str = "window";
 /// The property a failed painter's error is written to (ignored for dirtiness).
 pub const PAINT_ERROR: &str = "paint_error";
-
-/// A window's properties as the window manager reads them.
-#[derive(Clone, Debug, PartialEq)]
-pub struct WinProps {
-    pub name: Arc<str>,
-    pub subtype: Arc<str>,
-    pub layer: i64,
-    pub order: i64,
-    pub x: f64,
-    pub y: f64,
-    /// `None` until published: the display's width.
-    pub w: Option<f64>,
-    /// `None` until published: the display's height.
-    pub h: Option<f64>,
-    pub opacity: f64,
-    pub visible: bool,
-    pub clip: bool,
-}
-
-impl WinProps {
-    fn new(name: Arc<str>, subtype: Arc<str>) -> WinProps {
-        WinProps {
-            name,
-            subtype,
-            layer: 0,
-            order: 0,
-            x: 0.0,
-            y: 0.0,
-            w: None,
-            h: None,
-            opacity: 1.0,
-            visible: true,
-            clip: true,
-        }
-    }
-
-    /// The window's pixel rectangle on the screen.
-    pub fn rect(&self, display: (u32, u32)) -> IRect {
-        let w = self.w.unwrap_or(display.0 as f64);
-        let h = self.h.unwrap_or(display.1 as f64);
-        IRect::new(self.x.round() as i32, self.y.round() as i32, w.round() as i32, h.round() as i32)
-    }
-}
-
-/// What a property change means for a window.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Effect {
-    None,
-    Recomposite,
-    Repaint,
-}
-
-/// Applies one property value; returns what it changes.
-fn apply_prop(p: &mut WinProps, name: &str, v: Option<&Value>) -> Effect {
-    let f = |v: Option<&Value>, d: f64| v.and_then(Value::as_f64).unwrap_or(d);
-    let before = p.clone();
-    let effect = match name {
-        "x" => {
-            p.x = f(v, 0.0);
-            Effect::Recomposite
-        }
-        "y" => {
-            p.y = f(v, 0.0);
-            Effect::Recomposite
-        }
-        "w" => {
-            p.w = v.and_then(Value::as_f64);
-            Effect::Repaint
-        }
-        "h" => {
-            p.h = v.and_then(Value::as_f64);
-            Effect::Repaint
-        }
-        "layer" => {
-            p.layer = v.and_then(Value::as_f64).unwrap_or(0.0) as i64;
-            Effect::Recomposite
-        }
-        "order" => {
-            p.order = v.and_then(Value::as_f64).unwrap_or(0.0) as i64;
-            Effect::Recomposite
-        }
-        "opacity" => {
-            p.opacity = f(v, 1.0).clamp(0.0, 1.0);
-            Effect::Recomposite
-        }
-        "visible" => {
-            p.visible = v.and_then(Value::as_bool).unwrap_or(true);
-            Effect::Recomposite
-        }
-        "clip" => {
-            p.clip = v.and_then(Value::as_bool).unwrap_or(true);
-            Effect::Repaint
-        }
-        PAINT_ERROR | "frame" => return Effect::None,
-        // `revision`, `source` and any property of the painter's own: new content.
-        _ => return Effect::Repaint,
-    };
-    if *p == before { Effect::None } else { effect }
-}
 
 struct WinEntry {
     props: WinProps,
@@ -207,16 +117,6 @@ impl Layer {
             changed: None,
         }
     }
-}
-
-/// A point hit on a window.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Hit {
-    pub window: Guid,
-    pub name: Arc<str>,
-    /// The point in window-local pixels.
-    pub x: f32,
-    pub y: f32,
 }
 
 /// What one frame did.
@@ -645,102 +545,6 @@ impl WindowManager {
             }
         }
     }
-
-    /// The topmost window whose pixel at screen point (x, y) is not transparent (or whose
-    /// `hit` method says so). Invisible, failed and unclaimed windows are passed through.
-    pub fn hit_test(&self, x: f32, y: f32) -> Option<Hit> {
-        let (px, py) = (x.floor() as i32, y.floor() as i32);
-        for g in self.stacking.iter().rev() {
-            let Some(l) = self.layers.get(g) else { continue };
-            let r = l.shown;
-            if r.is_empty() || px < r.x || py < r.y || px >= r.right() || py >= r.bottom() {
-                continue;
-            }
-            let (lx, ly) = (x - l.pos.0 as f32, y - l.pos.1 as f32);
-            let name = self.props.get(g).map(|p| p.name.clone()).unwrap_or_else(|| "".into());
-            let hit = Hit { window: *g, name, x: lx, y: ly };
-            let slot = Arc::new(Mutex::new(None));
-            let s2 = slot.clone();
-            let args = vec![Value::Float(lx as f64), Value::Float(ly as f64)];
-            self.ds.call(*g, "hit", args, Some(CallOptions::immediate()), move |o| {
-                *s2.lock() = Some(o)
-            });
-            let answered = slot.lock().take();
-            match answered {
-                Some(CallOutcome::Accepted(v)) => {
-                    if v.first().and_then(Value::as_bool) == Some(true) {
-                        return Some(hit);
-                    }
-                    continue;
-                }
-                Some(CallOutcome::NoSuchMethod) | None => {}
-                Some(_) => continue,
-            }
-            let Some(pm) = &l.pixmap else { continue };
-            let i = ((py - r.y) as usize * pm.width() as usize + (px - r.x) as usize) * 4 + 3;
-            if pm.data().get(i).copied().unwrap_or(0) > 0 {
-                return Some(hit);
-            }
-        }
-        None
-    }
-
-    /// Routes a pointer event: to the window holding the pointer capture (a button is
-    /// down), else to the window hit. Sends `enter`/`leave` when the hovered window
-    /// changes. Returns the window that received the event.
-    pub fn pointer(&mut self, x: f32, y: f32, ev: crate::PointerEvent) -> Option<Hit> {
-        use crate::PointerEvent as P;
-        let hit = self.hit_test(x, y);
-        let target = match self.capture {
-            Some((g, _)) => {
-                let l = self.layers.get(&g);
-                let (lx, ly) = l.map_or((x, y), |l| (x - l.pos.0 as f32, y - l.pos.1 as f32));
-                let name = self.props.get(&g).map(|p| p.name.clone()).unwrap_or_else(|| "".into());
-                Some(Hit { window: g, name, x: lx, y: ly })
-            }
-            None => hit.clone(),
-        };
-        let hovered = hit.as_ref().map(|h| h.window);
-        if hovered != self.hover && !matches!(ev, P::Leave) {
-            if let Some(old) = self.hover {
-                self.send(old, "leave", -1, 0.0, 0.0);
-            }
-            if let Some(h) = &hit {
-                self.send(h.window, "enter", -1, h.x, h.y);
-            }
-            self.hover = hovered;
-        }
-        let t = target?;
-        match ev {
-            P::Move => self.send(t.window, "move", -1, t.x, t.y),
-            P::Down(b) => {
-                self.capture = Some((t.window, b as i64));
-                self.send(t.window, "down", b as i64, t.x, t.y);
-            }
-            P::Up(b) => {
-                if self.capture.is_some_and(|(_, cb)| cb == b as i64) {
-                    self.capture = None;
-                }
-                self.send(t.window, "up", b as i64, t.x, t.y);
-            }
-            P::Leave => {
-                if let Some(old) = self.hover.take() {
-                    self.send(old, "leave", -1, 0.0, 0.0);
-                }
-            }
-        }
-        Some(t)
-    }
-
-    fn send(&self, g: Guid, kind: &str, button: i64, x: f32, y: f32) {
-        let args = vec![
-            Value::str(kind),
-            Value::Int(button),
-            Value::Float(x as f64),
-            Value::Float(y as f64),
-        ];
-        self.ds.call(g, "pointer", args, None, |_| {});
-    }
 }
 
 impl Drop for WindowManager {
@@ -786,123 +590,6 @@ fn copy_into(dst: &mut Pixmap, src: &Pixmap, x: i32, y: i32) {
         let n = r.w as usize * 4;
         d[row as usize * dw + r.x as usize * 4..][..n].copy_from_slice(&s[sy * sw + sx..][..n]);
     }
-}
-
-fn on_child(
-    ds: &DataServer,
-    exec: &Executor,
-    sh: &Arc<Shared>,
-    subs: &Arc<Mutex<Vec<SubscriptionId>>>,
-    n: &Notification,
-) {
-    let (guid, name, kind) = match &n.subject {
-        Subject::Child { guid, name, kind, .. } => (*guid, name.clone(), kind.clone()),
-        Subject::Object => {
-            // root.display itself was deleted: every window goes.
-            let mut st = sh.state.lock();
-            let gone: Vec<Guid> = st.windows.keys().copied().collect();
-            st.windows.clear();
-            st.removed.extend(gone);
-            sh.changed(&mut st);
-            return;
-        }
-        Subject::Property { .. } => return,
-    };
-    let is_window = &*kind == WINDOW_TYPE;
-    let known = sh.state.lock().windows.contains_key(&guid);
-    match n.kind {
-        Kind::New | Kind::Changed if is_window && !known => {
-            let subtype = ds.info(guid).map(|i| i.subtype).unwrap_or_else(|_| "".into());
-            let mut props = WinProps::new(name, subtype);
-            for (p, v) in ds.properties(guid).unwrap_or_default() {
-                apply_prop(&mut props, p.as_str(), Some(&v));
-            }
-            {
-                let mut st = sh.state.lock();
-                st.windows.insert(
-                    guid,
-                    WinEntry { props, sub: None, repaint: true, damage: IRect::default() },
-                );
-                st.reindex = true;
-                sh.changed(&mut st);
-            }
-            publish_invalidate(ds, guid, sh);
-            let sh2 = sh.clone();
-            let sub = ds.subscribe_on(exec, Topic::properties(guid), move |n| {
-                let Some(name) = n.property_name() else { return };
-                let mut st = sh2.state.lock();
-                let Some(e) = st.windows.get_mut(&guid) else { return };
-                let effect = apply_prop(&mut e.props, name.as_str(), n.value());
-                if n.kind == Kind::New && effect == Effect::None {
-                    return;
-                }
-                match effect {
-                    Effect::None => return,
-                    Effect::Recomposite => {}
-                    Effect::Repaint => e.repaint = true,
-                }
-                sh2.changed(&mut st);
-            });
-            if let Ok(sub) = sub {
-                subs.lock().push(sub);
-                if let Some(e) = sh.state.lock().windows.get_mut(&guid) {
-                    e.sub = Some(sub);
-                }
-            }
-        }
-        Kind::Changed if is_window => {
-            let subtype = ds.info(guid).map(|i| i.subtype).unwrap_or_else(|_| "".into());
-            let mut st = sh.state.lock();
-            if let Some(e) = st.windows.get_mut(&guid) {
-                e.props.name = name;
-                e.props.subtype = subtype;
-                e.repaint = true;
-            }
-            sh.changed(&mut st);
-        }
-        Kind::New => {}
-        Kind::Changed | Kind::Deleted => {
-            let sub = {
-                let mut st = sh.state.lock();
-                let Some(e) = st.windows.remove(&guid) else { return };
-                st.removed.push(guid);
-                st.reindex = true;
-                sh.changed(&mut st);
-                e.sub
-            };
-            // Ended with no lock held: the window's property callback takes `state`.
-            if let Some(s) = sub {
-                subs.lock().retain(|x| *x != s);
-                ds.unsubscribe(s);
-            }
-        }
-    }
-}
-
-fn publish_invalidate(ds: &DataServer, window: Guid, sh: &Arc<Shared>) {
-    let sh = sh.clone();
-    let spec = MethodSpec::new("invalidate")
-        .param(ParamSpec::new("x", ValueKind::Float))
-        .param(ParamSpec::new("y", ValueKind::Float))
-        .param(ParamSpec::new("w", ValueKind::Float))
-        .param(ParamSpec::new("h", ValueKind::Float))
-        .defaults(CallOptions::immediate())
-        .describe("Marks a window-local rectangle of the window for repainting at the next frame");
-    let _ = ds.publish_method_fn(window, spec, move |a| {
-        let r = IRect::covering(crate::geom::Rect::new(
-            arg_f(&a[0]) as f32,
-            arg_f(&a[1]) as f32,
-            arg_f(&a[2]) as f32,
-            arg_f(&a[3]) as f32,
-        ));
-        let mut st = sh.state.lock();
-        let Some(e) = st.windows.get_mut(&window) else {
-            return CallOutcome::Failed("not a managed window".into());
-        };
-        e.damage = e.damage.union(&r);
-        sh.changed(&mut st);
-        CallOutcome::Accepted(vec![])
-    });
 }
 
 impl WindowManager {
