@@ -1,8 +1,9 @@
-//! No input makes the checker panic: random bytes, and soups of the language's own tokens
-//! (which reach far deeper into the passes than random bytes do). Bounded for CI:
+//! No input makes the checker panic, in the whole compile or in `mocu check`'s batched check:
+//! random bytes, and soups of the language's own tokens (which reach far deeper into the passes
+//! than random bytes do). Bounded for CI:
 //! `PROPTEST_CASES` raises the count for a longer local run.
 
-use mocu_language::{Diagnostics, MemoryLoader, SourceMap, check_path, render};
+use mocu_language::{Diagnostics, MemoryLoader, SourceMap, check_path, lint_path, render};
 use proptest::prelude::*;
 
 mod common;
@@ -15,6 +16,10 @@ fn check(text: &str) {
     let mut sources = SourceMap::new();
     let mut diags = Diagnostics::new();
     check_path("main.mocu", text.to_string(), &loader, &mut sources, &mut diags);
+    // `mocu check`'s own path (the layout read in batches) must not panic either.
+    let mut lint_sources = SourceMap::new();
+    let mut lint_diags = Diagnostics::new();
+    lint_path("main.mocu", text.to_string(), &loader, &mut lint_sources, &mut lint_diags);
     diags.sort();
     let list = diags.into_vec();
     // Rendering walks every span: it must not panic either.
