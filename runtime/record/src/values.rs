@@ -54,31 +54,28 @@ pub(crate) fn numeric(v: &mocu_value::Value) -> Option<(u8, f64)> {
     }
 }
 
-/// One entry, as gathered (the batch is laid out in columns when written).
-#[derive(Clone, Copy)]
-struct Entry {
-    id: u32,
-    seq: u32,
-    dt: u32,
-    kind: u8,
-    value: f64,
-}
-
-/// The batch being gathered.
+/// The batch being gathered, in its columns as they are written (little endian): an entry
+/// is three stores, and the message is the columns copied one after the other.
 #[derive(Default)]
 pub(crate) struct Batch {
     first_seq: u64,
     first_ns: u64,
-    entries: Vec<Entry>,
-    /// Whether entry `i` is change `first_seq + i` for every `i` so far.
+    len: usize,
+    ids: Vec<u8>,
+    dts: Vec<u8>,
+    values: Vec<u8>,
+    /// Each entry's number less `first_seq`, kept only once an entry is not the one after
+    /// the one before (`consecutive` false; filled in for those before then).
+    seqs: Vec<u8>,
+    /// Each entry's kind, kept only once an entry is not a float (`floats` false).
+    kinds: Vec<u8>,
     consecutive: bool,
-    /// Whether every entry so far is a float.
     floats: bool,
 }
 
 impl Batch {
     pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
+        self.len == 0
     }
 
     pub fn first(&self) -> (u64, u64) {
@@ -88,88 +85,146 @@ impl Batch {
     /// Whether an entry numbered `seq` at `t` fits (else: write this batch first).
     pub fn fits(&self, seq: u64, t: u64) -> bool {
         self.is_empty()
-            || (self.entries.len() < MAX_ENTRIES
+            || (self.len < MAX_ENTRIES
                 && seq.wrapping_sub(self.first_seq) <= u64::from(u32::MAX)
                 && t.wrapping_sub(self.first_ns) <= u64::from(u32::MAX))
+    }
+
+    fn start(&mut self, seq: u64, t: u64) {
+        self.first_seq = seq;
+        self.first_ns = t;
+        self.consecutive = true;
+        self.floats = true;
     }
 
     /// Adds an entry (call [`Batch::fits`] first).
     pub fn push(&mut self, id: u32, seq: u64, t: u64, kind: u8, value: f64) {
         if self.is_empty() {
-            self.first_seq = seq;
-            self.first_ns = t;
-            self.consecutive = true;
-            self.floats = true;
+            self.start(seq, t);
         }
+        self.entry(id, seq, t, kind, value);
+    }
+
+    fn entry(&mut self, id: u32, seq: u64, t: u64, kind: u8, value: f64) {
         let off = seq.wrapping_sub(self.first_seq) as u32;
-        self.consecutive &= off as usize == self.entries.len();
-        self.floats &= kind == FLOAT;
+        if self.consecutive && off as usize != self.len {
+            self.consecutive = false;
+            self.seqs.extend((0..self.len as u32).flat_map(u32::to_le_bytes));
+        }
+        if !self.consecutive {
+            self.seqs.extend_from_slice(&off.to_le_bytes());
+        }
+        if self.floats && kind != FLOAT {
+            self.floats = false;
+            self.kinds.resize(self.len, FLOAT);
+        }
+        if !self.floats {
+            self.kinds.push(kind);
+        }
         let dt = t.saturating_sub(self.first_ns) as u32;
-        self.entries.push(Entry { id, seq: off, dt, kind, value });
+        self.ids.extend_from_slice(&id.to_le_bytes());
+        self.dts.extend_from_slice(&dt.to_le_bytes());
+        self.values.extend_from_slice(&value.to_le_bytes());
+        self.len += 1;
     }
 
     pub fn len(&self) -> usize {
-        self.entries.len()
+        self.len
     }
 
     /// Adds a run of entries from the feed's numeric lane, property `n.id` as the recording's
     /// `ids[n.id]` (call [`Batch::fits`] for its last entry first: numbers and stamps grow
-    /// along a run).
+    /// along a run). One pass storing three columns; `seq` and `kind` only when needed.
     pub fn extend(&mut self, run: &[Numeric], ids: &[u32]) {
         let (Some(first), Some(last)) = (run.first(), run.last()) else { return };
         if self.is_empty() {
-            self.first_seq = first.seq;
-            self.first_ns = first.ns;
-            self.consecutive = true;
-            self.floats = true;
+            self.start(first.seq, first.ns);
         }
-        let (seq0, ns0) = (self.first_seq, self.first_ns);
-        let last_at = self.entries.len() + run.len() - 1;
-        self.consecutive &= last.seq.wrapping_sub(seq0) as usize == last_at
-            && first.seq.wrapping_sub(seq0) as usize == self.entries.len();
-        self.floats &= run.iter().all(|n| n.kind == NumKind::Float);
-        self.entries.extend(run.iter().map(|n| {
-            let (kind, value) = match n.kind {
-                NumKind::Float => (FLOAT, f64::from_bits(n.bits)),
-                NumKind::Int => (INT, n.bits as i64 as f64),
-                NumKind::Bool => (BOOL, n.bits as f64),
+        let (seq0, ns0, len) = (self.first_seq, self.first_ns, self.len);
+        // Numbers grow along a run: its entries follow on from the batch's one by one when
+        // its first and last numbers say so.
+        let consecutive = first.seq.wrapping_sub(seq0) as usize == len
+            && last.seq.wrapping_sub(seq0) as usize == len + run.len() - 1;
+        if !(consecutive && self.consecutive) {
+            if self.consecutive {
+                self.consecutive = false;
+                self.seqs.extend((0..len as u32).flat_map(u32::to_le_bytes));
+            }
+            let offs = grow(&mut self.seqs, 4 * run.len());
+            for (n, o) in run.iter().zip(offs.chunks_exact_mut(4)) {
+                o.copy_from_slice(&(n.seq.wrapping_sub(seq0) as u32).to_le_bytes());
+            }
+        }
+        let floats = run.iter().all(|n| n.kind == NumKind::Float);
+        if !(floats && self.floats) {
+            if self.floats {
+                self.floats = false;
+                self.kinds.resize(len, FLOAT);
+            }
+            self.kinds.extend(run.iter().map(|n| match n.kind {
+                NumKind::Float => FLOAT,
+                NumKind::Int => INT,
+                NumKind::Bool => BOOL,
+            }));
+        }
+        let id_col = grow(&mut self.ids, 4 * run.len());
+        for (n, o) in run.iter().zip(id_col.chunks_exact_mut(4)) {
+            o.copy_from_slice(&ids[n.id as usize].to_le_bytes());
+        }
+        let dt_col = grow(&mut self.dts, 4 * run.len());
+        for (n, o) in run.iter().zip(dt_col.chunks_exact_mut(4)) {
+            o.copy_from_slice(&(n.ns.saturating_sub(ns0) as u32).to_le_bytes());
+        }
+        let value_col = grow(&mut self.values, 8 * run.len());
+        for (n, o) in run.iter().zip(value_col.chunks_exact_mut(8)) {
+            let bits = match n.kind {
+                NumKind::Float => n.bits,
+                NumKind::Int => (n.bits as i64 as f64).to_bits(),
+                NumKind::Bool => (n.bits as f64).to_bits(),
             };
-            let seq = n.seq.wrapping_sub(seq0) as u32;
-            let dt = n.ns.saturating_sub(ns0) as u32;
-            Entry { id: ids[n.id as usize], seq, dt, kind, value }
-        }));
+            o.copy_from_slice(&bits.to_le_bytes());
+        }
+        self.len += run.len();
     }
 
     /// The batch as one CDR message (little endian) into `out`; the batch is emptied.
     pub fn encode(&mut self, out: &mut Vec<u8>) {
-        let n = self.entries.len();
+        let n = self.len;
         out.clear();
         out.reserve(48 + n * 21);
         let mut c = Cdr::start(out);
         c.u64(self.first_seq);
         c.u64(self.first_ns);
         c.len(n);
-        c.0.extend(self.entries.iter().flat_map(|e| e.id.to_le_bytes()));
-        c.len(if self.consecutive { 0 } else { n });
-        if !self.consecutive {
-            c.0.extend(self.entries.iter().flat_map(|e| e.seq.to_le_bytes()));
-        }
+        c.0.extend_from_slice(&self.ids);
+        c.len(self.seqs.len() / 4);
+        c.0.extend_from_slice(&self.seqs);
         c.len(n);
-        c.0.extend(self.entries.iter().flat_map(|e| e.dt.to_le_bytes()));
-        c.len(if self.floats { 0 } else { n });
-        if !self.floats {
-            c.0.extend(self.entries.iter().map(|e| e.kind));
-        }
+        c.0.extend_from_slice(&self.dts);
+        c.len(self.kinds.len());
+        c.0.extend_from_slice(&self.kinds);
         c.len(n);
         c.align(8);
-        c.0.extend(self.entries.iter().flat_map(|e| e.value.to_le_bytes()));
-        self.entries.clear();
+        c.0.extend_from_slice(&self.values);
+        self.len = 0;
+        for column in [&mut self.ids, &mut self.dts, &mut self.values, &mut self.seqs] {
+            column.clear();
+        }
+        self.kinds.clear();
     }
+}
+
+/// `column` grown by `n` bytes; the new bytes, to fill.
+fn grow(column: &mut Vec<u8>, n: usize) -> &mut [u8] {
+    let at = column.len();
+    column.resize(at + n, 0);
+    &mut column[at..]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mocu_value::Value;
 
     #[test]
     fn a_batch_is_laid_out_as_cdr_aligned_from_after_its_header() {
@@ -214,8 +269,42 @@ mod tests {
     }
 
     #[test]
+    fn runs_from_the_lane_encode_as_the_same_entries_pushed_one_by_one() {
+        let n = |seq, ns, id, kind, bits| Numeric { seq, ns, bits, id, kind };
+        let f = |x: f64| x.to_bits();
+        let ids = [0, 10, 11, 12];
+        let runs = [
+            vec![n(5, 100, 1, NumKind::Float, f(1.5)), n(6, 110, 2, NumKind::Float, f(2.5))],
+            vec![n(7, 120, 3, NumKind::Float, f(-1.0))],
+            vec![n(9, 130, 1, NumKind::Int, (-7i64) as u64), n(10, 140, 2, NumKind::Bool, 1)],
+            vec![n(11, 150, 3, NumKind::Float, f(0.25))],
+        ];
+        // Consecutive floats, then a gap in the numbers and other kinds: each column as
+        // pushing the same entries lays it out.
+        for upto in 1..=runs.len() {
+            let (mut a, mut b) = (Batch::default(), Batch::default());
+            for run in &runs[..upto] {
+                a.extend(run, &ids);
+                for e in run {
+                    let v = Value::Float(f64::from_bits(e.bits));
+                    let (kind, x) = match e.kind {
+                        NumKind::Float => numeric(&v).unwrap(),
+                        NumKind::Int => (INT, e.bits as i64 as f64),
+                        NumKind::Bool => (BOOL, e.bits as f64),
+                    };
+                    b.push(ids[e.id as usize], e.seq, e.ns, kind, x);
+                }
+            }
+            assert_eq!(a.len(), b.len());
+            let (mut ea, mut eb) = (Vec::new(), Vec::new());
+            a.encode(&mut ea);
+            b.encode(&mut eb);
+            assert_eq!(ea, eb, "after {upto} runs");
+        }
+    }
+
+    #[test]
     fn only_integers_a_float64_holds_exactly_go_in_a_batch() {
-        use mocu_value::Value;
         assert_eq!(numeric(&Value::Int(1 << 53)), Some((INT, 9_007_199_254_740_992.0)));
         assert_eq!(numeric(&Value::Int((1 << 53) + 1)), None);
         assert_eq!(numeric(&Value::str("x")), None);
