@@ -159,6 +159,41 @@ fn check_in_batches_reports_what_the_whole_compile_reports_for_a_large_layout() 
     assert!(compiled(dir, &text, &Schema::default()).len() >= 4, "the mistakes were not seen");
 }
 
+#[test]
+fn what_spans_batches_is_carried_from_one_to_the_next() {
+    // Each item in its own batch: names used before they are defined, a watch named twice,
+    // a mode used before the `bind` that declares it and one nobody declares, unused lets
+    // in a component and at the top, a component used before its definition, a widget
+    // outside its window.
+    let text = r#"use "stdlib/gauges.mocu"
+watch low { when v.fuel < 0.1 then mode nav }
+in hud {
+  Gauge2 { at 500 500 10 10  value v.fuel }
+  Dial { at 0 0 10 10  value v.nav.speed  range 0 .. 40 }
+}
+menu for type "vehicle" { item "Stop" -> mode fast }
+component Gauge2(value: number?) {
+  let unused_inside = 1
+  let f = value ?? 0
+  rect 0 0 (w * f) h
+}
+watch low { when v.fuel < 0.2 then alert warning "twice" }
+let v = root.vehicles.usv1
+let never = 3
+window hud { layer 1  rect 0 0 100 100 }
+bind keyboard {
+  mode nav { key n -> set v.nav.goal_throttle = 1 }
+}
+"#;
+    let dir = "../../layouts/carried.mocu";
+    let want = compiled(dir, text, &Schema::default());
+    for needle in ["E0203", "E0212", "W0001", "W0002"] {
+        assert!(want.iter().any(|d| d.contains(needle)), "no {needle} in {want:#?}");
+    }
+    assert_same(dir, text, &Schema::default(), &[1, 64, BATCH_BYTES]);
+    assert_same(dir, text, project_schema(), &[1]);
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
 
