@@ -194,6 +194,40 @@ bind keyboard {
     assert_same(dir, text, project_schema(), &[1]);
 }
 
+#[test]
+fn a_used_file_that_uses_the_layout_back_sees_its_components_and_lets() {
+    // lib.mocu uses the layout back (a cycle, reported once); the layout's component takes
+    // its default from lib.mocu's `let`, and its body, read only later by the batched
+    // check, has an unused `let`; widgets use both files' components.
+    let lib = "use \"main.mocu\"\ncomponent Pip(value: number?) { circle 0 0 (w * (value ?? 0)) }\nlet shared = 2\n";
+    let main = "use \"lib.mocu\"\ncomponent Mark(value: number?, size: number = shared) {\n  let unused = 1\n  circle 0 0 (size)\n}\nwindow w { layer 1  rect 0 0 100 100 }\nin w { Pip { at 0 0 10 10  value 1 }  Mark { at 0 0 10 10  value \"x\" } }\n";
+    let loader = mocu_language::MemoryLoader::new().with("lib.mocu", lib).with("main.mocu", main);
+    let config = Config::default();
+    let none = Schema::default();
+    let mut sources = SourceMap::new();
+    let mut diags = Diagnostics::new();
+    compile_layout("main.mocu", main.into(), &loader, &none, &config, &mut sources, &mut diags);
+    let want = seen(&sources, diags);
+    for code in ["E0202", "E0301", "W0001"] {
+        assert!(want.iter().any(|d| d.contains(code)), "no {code} in {want:#?}");
+    }
+    for batch in [1, BATCH_BYTES] {
+        let mut sources = SourceMap::new();
+        let mut diags = Diagnostics::new();
+        lint_layout_in_batches(
+            "main.mocu",
+            main.into(),
+            &loader,
+            &none,
+            &config,
+            &mut sources,
+            &mut diags,
+            batch,
+        );
+        assert_eq!(seen(&sources, diags), want, "in batches of {batch} bytes");
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 200, failure_persistence: None, ..ProptestConfig::default() })]
 
