@@ -23,7 +23,7 @@ use crate::schema::Schema;
 use crate::source::{SourceLoader, SourceMap};
 
 /// Source bytes of the layout read, checked and dropped together: large enough that a
-/// batch's fixed costs (a typer, the window table of W0003) are small against its items,
+/// batch's fixed costs (a typer, the window table of W0002) are small against its items,
 /// small enough that its trees are a small part of the check's memory.
 pub const BATCH_BYTES: usize = 16 << 10;
 

@@ -22,7 +22,7 @@ fn length(b: &Bound, full: f64, scale: f64) -> Option<f64> {
     Some(if b.expr.ty.unit() == Some("%") { v / 100.0 * full } else { v * scale })
 }
 
-/// W0003 for `widgets` placed in `windows` (the first of each name), on a `screen` at `scale`.
+/// W0002 for `widgets` placed in `windows` (the first of each name), on a `screen` at `scale`.
 pub fn warn_widgets_outside(
     windows: &[Window],
     widgets: &[Widget],
@@ -34,7 +34,7 @@ pub fn warn_widgets_outside(
 }
 
 /// Each window's size in screen px where it is constant, by name (the first window of each
-/// name, as a search would find): what W0003 needs of the windows, kept by `crate::lint`
+/// name, as a search would find): what W0002 needs of the windows, kept by `crate::lint`
 /// while the program they came from is dropped.
 #[derive(Default)]
 pub struct WindowSizes(super::FastMap<String, Option<(f64, f64)>>);
@@ -53,7 +53,7 @@ impl WindowSizes {
         sizes
     }
 
-    /// W0003 for `widgets` placed in these windows.
+    /// W0002 for `widgets` placed in these windows.
     pub fn warn_widgets_outside(
         &self,
         widgets: &[Widget],
