@@ -83,7 +83,7 @@ pub fn lint_layout_in_batches(
     let design = resident.design;
     let scale = crate::placement::scale(design, config.screen);
     let windows = WindowSizes::of(&resident.windows, config.screen, scale);
-    let mut modes = check_types::declared_modes(&resident.bindings);
+    let used_files_modes = check_types::declared_modes(&resident.bindings);
     drop(resident);
     // The rest of the layout, a batch at a time, through the same passes.
     let file = modules[0].file;
@@ -91,7 +91,7 @@ pub fn lint_layout_in_batches(
     let mut watches = WatchNames::default();
     let mut makes_a_layout = false;
     let mut component_lets: Vec<Ident> = Vec::new();
-    let mut batch_modes = 0;
+    let mut modes = Vec::new();
     for batch in later.batches(batch_bytes) {
         let items = parser::parse_later(file, text, &later, batch, diags);
         for item in &items {
@@ -111,12 +111,11 @@ pub fn lint_layout_in_batches(
         program.design = design;
         check_program(&program, schema, diags);
         windows.warn_widgets_outside(&program.widgets, config.screen, scale, diags);
-        // The layout's own modes first, as in the whole program's bindings.
-        let layout_modes = check_types::declared_modes(&program.bindings);
-        modes.splice(batch_modes..batch_modes, layout_modes.iter().cloned());
-        batch_modes += layout_modes.len();
+        modes.extend(check_types::declared_modes(&program.bindings));
     }
-    // What needed every batch: modes declared anywhere, `let`s read anywhere.
+    // What needed every batch: modes declared anywhere (the layout's first, as in the whole
+    // program's bindings), `let`s read anywhere.
+    modes.extend(used_files_modes);
     carry.report_unknown_modes(&modes, diags);
     for (m, module) in modules.iter().enumerate() {
         if warn_unused::has_syntax_errors(module.file, diags) {

@@ -67,7 +67,10 @@ pub fn check_types_resident(
     schema: &Schema,
     diags: &mut Diagnostics,
 ) -> (Program, Carry) {
-    type_modules(modules, defs, schema, Some(0), diags)
+    let (program, mut carry) = type_modules(modules, defs, schema, Some(0), diags);
+    // The batches number their `let`s after these.
+    carry.lets = program.lets.0.clone();
+    (program, carry)
 }
 
 /// Types items of the layout (module 0) that are not in its tree: the program of just these
@@ -115,8 +118,8 @@ fn type_modules(
     for m in 0..modules.len() {
         t.module(m);
     }
-    let (mut program, carry) = t.finish();
-    program.lets = Lets(carry.lets.clone());
+    let (mut program, mut carry) = t.finish();
+    program.lets = Lets(std::mem::take(&mut carry.lets));
     program.windows.shrink_to_fit();
     program.widgets.shrink_to_fit();
     program.components.shrink_to_fit();

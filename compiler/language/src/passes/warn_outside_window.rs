@@ -8,11 +8,15 @@ use crate::program::*;
 
 pub fn warn_outside_window(program: &Program, screen: (f64, f64), diags: &mut Diagnostics) {
     let scale = crate::placement::scale(program.design, screen);
-    warn_widgets_outside(&program.windows, &program.widgets, screen, scale, diags);
+    let layout = WindowSizes::of(&program.windows, screen, scale);
+    layout.warn_widgets_outside(&program.widgets, screen, scale, diags);
     for t in &program.templates {
-        let mut windows = t.windows.clone();
-        windows.extend(program.windows.iter().cloned());
-        warn_widgets_outside(&windows, &t.widgets, screen, scale, diags);
+        // A template's widgets are in its own windows first, then the layout's.
+        let mut sizes = WindowSizes::of(&t.windows, screen, scale);
+        for (name, size) in &layout.0 {
+            sizes.0.entry(name.clone()).or_insert(*size);
+        }
+        sizes.warn_widgets_outside(&t.widgets, screen, scale, diags);
     }
 }
 
@@ -20,17 +24,6 @@ pub fn warn_outside_window(program: &Program, screen: (f64, f64), diags: &mut Di
 fn length(b: &Bound, full: f64, scale: f64) -> Option<f64> {
     let v = b.expr.constant()?.number()?;
     Some(if b.expr.ty.unit() == Some("%") { v / 100.0 * full } else { v * scale })
-}
-
-/// W0002 for `widgets` placed in `windows` (the first of each name), on a `screen` at `scale`.
-pub fn warn_widgets_outside(
-    windows: &[Window],
-    widgets: &[Widget],
-    screen: (f64, f64),
-    scale: f64,
-    diags: &mut Diagnostics,
-) {
-    WindowSizes::of(windows, screen, scale).warn_widgets_outside(widgets, screen, scale, diags);
 }
 
 /// Each window's size in screen px where it is constant, by name (the first window of each
