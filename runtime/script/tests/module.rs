@@ -71,6 +71,9 @@ fn a_reload_replaces_the_script_and_a_broken_file_keeps_the_running_one() {
     let mut h = host(&w);
     h.start(&spec(&file)).unwrap();
     let module = w.ds.resolve(&["modules", "ops"]).unwrap();
+    // The first script's initial value is delivered on its executor: wait for it, so the
+    // reload below stops a script that has run (a reload before it would drop it unseen).
+    assert_eq!(w.out("a"), Some(Value::Float(2.0)), "the first script saw the initial value");
 
     std::fs::write(
         &file,
