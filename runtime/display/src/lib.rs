@@ -53,7 +53,8 @@ pub use geom::{IRect, Point, Rect, Size, Transform};
 pub use gpu::GpuCompositor;
 pub use image::Image;
 pub use paint::{
-    PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, pointer_spec, with_canvas,
+    Coalesced, PaintArgs, claim_window, invalidate, invalidate_rect, paint_spec, pointer_spec,
+    with_canvas,
 };
 pub use path::{Path, PathBuilder, PathEl};
 #[cfg(feature = "gpu")]

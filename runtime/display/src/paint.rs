@@ -118,6 +118,32 @@ pub fn invalidate(ds: &DataServer, window: Guid) -> Result<(), DsError> {
     ds.set(window, "revision", Value::Int(rev.wrapping_add(1)))
 }
 
+/// A job that any number of asks run once: [`Coalesced::ask`] queues it on an executor
+/// unless it is queued already, and every ask made before it runs is answered by that run.
+/// For a module that invalidates its windows on world-model changes: a fleet at 100 Hz
+/// changes tens of thousands of properties a second, and a window needs its `revision`
+/// moved once before the next frame, not once per change.
+#[derive(Clone, Default)]
+pub struct Coalesced {
+    queued: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl Coalesced {
+    /// Queues `job` on `exec`, unless a job asked for earlier has not started yet.
+    pub fn ask(&self, exec: &mocu_dataserver::Executor, job: impl FnOnce() + Send + 'static) {
+        use std::sync::atomic::Ordering;
+        if self.queued.swap(true, Ordering::AcqRel) {
+            return;
+        }
+        let queued = self.queued.clone();
+        exec.spawn(move || {
+            // Cleared before the job: an ask made while it runs queues the next one.
+            queued.store(false, Ordering::Release);
+            job();
+        });
+    }
+}
+
 /// Says only `r` (window-local) of `window` changed. Falls back to [`invalidate`] when no
 /// window manager serves the window.
 pub fn invalidate_rect(ds: &DataServer, window: Guid, r: Rect) -> Result<(), DsError> {
@@ -131,5 +157,41 @@ pub fn invalidate_rect(ds: &DataServer, window: Guid, r: Rect) -> Result<(), DsE
     match outcome {
         Some(CallOutcome::Accepted(_)) => Ok(()),
         _ => invalidate(ds, window),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Coalesced;
+    use mocu_dataserver::DataServer;
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+
+    #[test]
+    fn asks_made_before_the_job_runs_run_it_once_and_a_later_ask_runs_it_again() {
+        let ds = DataServer::default();
+        let exec = ds.serial_executor();
+        let runs = Arc::new(AtomicUsize::new(0));
+        let once = Coalesced::default();
+        // The executor held until the asks are made.
+        let (release, held) = std::sync::mpsc::sync_channel::<()>(0);
+        exec.spawn(move || {
+            let _ = held.recv();
+        });
+        for _ in 0..1000 {
+            let runs = runs.clone();
+            once.ask(&exec, move || {
+                runs.fetch_add(1, Ordering::SeqCst);
+            });
+        }
+        release.send(()).unwrap();
+        ds.quiesce();
+        assert_eq!(runs.load(Ordering::SeqCst), 1);
+        let r = runs.clone();
+        once.ask(&exec, move || {
+            r.fetch_add(1, Ordering::SeqCst);
+        });
+        ds.quiesce();
+        assert_eq!(runs.load(Ordering::SeqCst), 2);
     }
 }

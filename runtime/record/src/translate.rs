@@ -9,6 +9,7 @@ use mocu_dataserver::{CallOutcome, Change, Guid, PropName, Stamped, Value};
 use std::collections::{HashMap, HashSet};
 
 mod lane;
+mod place;
 
 /// A keyframe at least this often (nanoseconds of `log_time`) …
 const SNAPSHOT_NS: u64 = 10_000_000_000;
@@ -35,8 +36,13 @@ pub(crate) struct Translator {
     place_names: [PropName; 3],
     /// Calls not recorded, until their outcome comes.
     skipped: HashSet<u64>,
-    /// Each object's last `lat`, `lon`, `alt`.
-    places: HashMap<Guid, [Option<f64>; 3]>,
+    /// Each object's last `lat`, `lon`, `alt` and its `/location/…` fixes (`place.rs`).
+    places: HashMap<Guid, place::Place>,
+    /// Objects whose last position waits for its fix.
+    waiting_fixes: Vec<Guid>,
+    /// Each property the feed's lane numbered (by that number): its object and name,
+    /// asked of the feed once.
+    numbered: Vec<Option<(Guid, PropName)>>,
     /// When each pixel camera's last recorded frame was sent.
     raw_last: HashMap<Guid, u64>,
     /// The recording's `id` of each property by the server's number for it in the feed's
@@ -62,6 +68,8 @@ impl Translator {
             place_names: [PropName::new("lat"), PropName::new("lon"), PropName::new("alt")],
             skipped: HashSet::new(),
             places: HashMap::new(),
+            waiting_fixes: Vec::new(),
+            numbered: Vec::new(),
             raw_last: HashMap::new(),
             lane: Vec::new(),
             mute: Vec::new(),
@@ -154,6 +162,9 @@ impl Translator {
             self.batch.push(id, s.seq, t, kind, x);
             return Ok(());
         }
+        if let Change::Deleted { object } = s.change {
+            self.forget_place(object)?;
+        }
         let b = &mut self.buf;
         b.clear();
         let channel = match s.change.clone() {
@@ -213,7 +224,6 @@ impl Translator {
                 json::string(b, &self.world.path(object));
                 b.push(b'}');
                 self.world.delete(object);
-                self.places.remove(&object);
                 self.raw_last.remove(&object);
                 self.since_snapshot += 1;
                 self.out.object
@@ -260,7 +270,7 @@ impl Translator {
                     self.out.write(ch, s.seq, t, &self.buf)?;
                 }
                 match self.place_names.iter().position(|&n| n == name) {
-                    Some(i) => return self.place(object, i, &value, s.seq, t),
+                    Some(i) => return self.place(object, i, value.as_f64(), s.seq, t),
                     None => return Ok(()),
                 }
             }
@@ -403,34 +413,6 @@ impl Translator {
         Ok(())
     }
 
-    /// A `lat`, `lon` or `alt` change: the object's `foxglove.LocationFix`.
-    fn place(&mut self, object: Guid, i: usize, v: &Value, seq: u64, t: u64) -> Result<(), String> {
-        let entry = self.places.entry(object).or_default();
-        entry[i] = v.as_f64();
-        let [Some(lat), Some(lon), alt] = *entry else { return Ok(()) };
-        if !(lat.is_finite() && lon.is_finite()) {
-            return Ok(());
-        }
-        let path = self.world.path(object);
-        let ch = self.out.dynamic(Dynamic::Location, &format!("/location/{path}"))?;
-        let b = &mut self.buf;
-        b.clear();
-        timestamp(b, t);
-        b.extend_from_slice(b",\"frame_id\":");
-        json::string(b, &path);
-        b.extend_from_slice(b",\"latitude\":");
-        json::float(b, lat);
-        b.extend_from_slice(b",\"longitude\":");
-        json::float(b, lon);
-        b.extend_from_slice(b",\"altitude\":");
-        json::float(b, alt.filter(|a| a.is_finite()).unwrap_or(0.0));
-        b.extend_from_slice(
-            b",\"position_covariance\":[0,0,0,0,0,0,0,0,0],\"position_covariance_type\":0}",
-        );
-        self.out.write(ch, seq, t, &self.buf)?;
-        Ok(())
-    }
-
     pub fn event(&mut self, e: Event) -> Result<(), String> {
         let t = nanos(e.at);
         let topic = EventTopic::of(&e.event);
@@ -478,11 +460,13 @@ impl Translator {
     }
 
     pub fn flush(&mut self) -> Result<(), String> {
+        self.due_fixes(self.last_time)?;
         self.write_values()?;
         self.out.flush()
     }
 
     pub fn finish(mut self) -> Result<Totals, String> {
+        self.due_fixes(u64::MAX)?;
         self.write_values()?;
         let totals = Totals { messages: self.out.messages, bytes: self.out.bytes };
         self.out.finish()?;

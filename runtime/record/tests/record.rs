@@ -369,6 +369,48 @@ fn a_position_is_recorded_as_a_location_fix_once_both_lat_and_lon_are_known() {
 }
 
 #[test]
+fn a_moving_object_gets_a_location_fix_at_most_every_100_ms_and_always_its_last_position() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("t.mcap");
+    let (ds, clock) = manual();
+    let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
+    let nav = ds.create_object(ds.root(), ObjectInfo::new("nav", "nav")).unwrap();
+    let gone = ds.create_object(ds.root(), ObjectInfo::new("gone", "nav")).unwrap();
+    // 100 Hz for a quarter of a second, then still.
+    let lat = |i: u64| 30.0 + i as f64 * 0.001;
+    for i in 0..=25 {
+        ds.set(nav, "lat", Value::Float(lat(i))).unwrap();
+        ds.set(nav, "lon", Value::Float(-117.0)).unwrap();
+        clock.advance(ms(10));
+    }
+    // A position that waits for its fix when its object is deleted: written first.
+    ds.set(gone, "lat", Value::Float(1.0)).unwrap();
+    ds.set(gone, "lon", Value::Float(2.0)).unwrap();
+    ds.set(gone, "lat", Value::Float(1.5)).unwrap();
+    ds.delete_object(gone).unwrap();
+    rec.finish().unwrap();
+    let msgs = read(&file);
+    let fixes = |topic| -> Vec<(u64, f64, f64)> {
+        on(&msgs, topic)
+            .iter()
+            .map(|(_, t, j)| {
+                let deg = |k: &str| j[k].as_f64().unwrap();
+                (t / 1_000_000, deg("latitude"), deg("longitude"))
+            })
+            .collect()
+    };
+    // At 0 ms (both known), then at the first change 100 ms after each fix, then the last
+    // position (250 ms) when the recording ends.
+    let want: Vec<_> = [0, 10, 20, 25].map(|i| (i * 10, lat(i), -117.0)).into();
+    assert_eq!(fixes("/location/root.nav"), want);
+    assert_eq!(fixes("/location/root.gone"), vec![(260, 1.0, 2.0), (260, 1.5, 2.0)]);
+    // Every position is recorded all the same: each property's first value where it is
+    // created (`/world/property`), every later one in the batches.
+    let later = on(&msgs, "/world/values").iter().filter(|(_, _, j)| j["kind"] == "float").count();
+    assert_eq!(later, 25 + 1, "nav's 25 latitudes after its first, gone's second");
+}
+
+#[test]
 fn a_keyframe_holds_the_world_as_the_changes_before_it_left_it() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("t.mcap");

@@ -27,7 +27,7 @@ use mocu_dataserver::{
     Subject, SubscriptionId, Topic,
 };
 use mocu_display::{
-    Brush, Canvas, Color, PaintArgs, Point, Rect, Stroke, claim_window, invalidate,
+    Brush, Canvas, Coalesced, Color, PaintArgs, Point, Rect, Stroke, claim_window, invalidate,
 };
 use mocu_value::{Guid, PropName, Value};
 use parking_lot::Mutex;
@@ -46,6 +46,10 @@ struct Shared {
     exec: Executor,
     state: Mutex<State>,
     tiles: Arc<TileCache>,
+    /// Itself, for the jobs it queues.
+    me: std::sync::Weak<Shared>,
+    /// The map windows' invalidation ([`Shared::repaint`]).
+    repaint: Coalesced,
 }
 
 #[derive(Default)]
@@ -77,11 +81,13 @@ impl MapModule {
     pub fn start(ds: &DataServer) -> Result<MapModule, String> {
         let display =
             mocu_display::ensure_display_object(ds, 1920, 1080).map_err(|e| e.to_string())?;
-        let shared = Arc::new(Shared {
+        let shared = Arc::new_cyclic(|me| Shared {
             ds: ds.clone(),
             exec: ds.serial_executor(),
             state: Mutex::default(),
             tiles: Arc::default(),
+            me: me.clone(),
+            repaint: Coalesced::default(),
         });
         let weak = Arc::downgrade(&shared);
         let sub = ds
@@ -291,11 +297,19 @@ impl Shared {
         self.repaint();
     }
 
+    /// Asks for the map windows to be drawn again: their `revision` moves once, in a job
+    /// queued on the module's executor behind the changes that asked ([`Coalesced`]). A
+    /// fleet at 100 Hz asks tens of thousands of times a second (each vehicle's position,
+    /// heading, route…).
     fn repaint(&self) {
-        let maps = self.state.lock().maps.clone();
-        for m in maps {
-            let _ = invalidate(&self.ds, m);
-        }
+        let me = self.me.clone();
+        self.repaint.ask(&self.exec, move || {
+            let Some(sh) = me.upgrade() else { return };
+            let maps = sh.state.lock().maps.clone();
+            for m in maps {
+                let _ = invalidate(&sh.ds, m);
+            }
+        });
     }
 
     fn publish_input(self: &Arc<Self>, g: Guid) {

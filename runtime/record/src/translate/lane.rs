@@ -7,7 +7,7 @@
 
 use super::{SNAPSHOT_CHANGES, SNAPSHOT_NS, Translator};
 use crate::values;
-use mocu_dataserver::{Change, ChangeFeed, NumKind, Numeric, Stamped};
+use mocu_dataserver::{Change, ChangeFeed, Guid, NumKind, Numeric, PropName, Stamped};
 use std::time::{Duration, UNIX_EPOCH};
 
 /// The server's number of a property not resolved yet.
@@ -35,7 +35,7 @@ impl Translator {
         for (listener, muted) in self.mute.drain(..) {
             feed.mute(listener, muted);
         }
-        Ok(())
+        self.due_fixes(self.last_time)
     }
 
     fn numeric(&mut self, entries: &[Numeric], feed: &ChangeFeed) -> Result<(), String> {
@@ -97,7 +97,7 @@ impl Translator {
     /// An entry as the change it stands for (a keyframe or a new batch first when due);
     /// a property met for the first time is then known by the server's number.
     fn numeric_slow(&mut self, n: &Numeric, id: u32, feed: &ChangeFeed) -> Result<(), String> {
-        let Some((object, name)) = feed.numbered(n.id) else { return Ok(()) };
+        let Some((object, name)) = self.named(n.id, feed) else { return Ok(()) };
         let change =
             Change::PropertySet { object, name, value: n.value(), meta: None, created: false };
         let wall = UNIX_EPOCH + Duration::from_nanos(n.ns);
@@ -115,5 +115,21 @@ impl Translator {
         }
         self.lane[i] = id;
         Ok(())
+    }
+
+    /// The object and name of the property the feed numbered `number`: asked of the feed
+    /// (under its lock, which the writers take) only the first time; numbers are never
+    /// reused.
+    fn named(&mut self, number: u32, feed: &ChangeFeed) -> Option<(Guid, PropName)> {
+        let i = number as usize;
+        if let Some(Some(known)) = self.numbered.get(i) {
+            return Some(*known);
+        }
+        let named = feed.numbered(number)?;
+        if self.numbered.len() <= i {
+            self.numbered.resize(i + 1, None);
+        }
+        self.numbered[i] = Some(named);
+        Some(named)
     }
 }
