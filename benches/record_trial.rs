@@ -263,18 +263,23 @@ fn main() {
     });
     let dir = tempfile::tempdir().unwrap();
     let ports = Ports { mavlink: free_port(), video: free_port() };
-    let total = rounds * 2 * 2 * (secs + 3) + 10;
+    // Streams until the bench ends (it is stopped when dropped), however slow the runs.
     let _camera = Ffmpeg::stream_source(
         "testsrc2=size=640x480:rate=30",
         Kind::RtpH264,
         ports.video,
-        total,
+        3600,
         &[],
         "",
     );
     let stop = Arc::new(AtomicBool::new(false));
     let sender =
         send_telemetry(format!("127.0.0.1:{}", ports.mavlink).parse().unwrap(), stop.clone());
+    if !full {
+        eprintln!(
+            "\n(test mode: one short round, only to check that it runs; the figures: `cargo bench --bench record_trial`)"
+        );
+    }
     eprintln!(
         "\nrecording overhead of the OCU: {VEHICLES} MAVLink vehicles x 19 properties at {RATE_HZ} Hz + one 640x480 H.264 camera at 30 fps, {secs} s runs, {rounds} round(s):"
     );
