@@ -4,6 +4,9 @@
 //! grown and heartbeats sent back per second, with the old behaviour (no bound, every sender
 //! answered) against the defaults.
 
+#[path = "common/telemetry.rs"]
+mod telemetry;
+
 use criterion::{BatchSize, Criterion, Throughput, criterion_group, criterion_main};
 use mavlink::MavHeader;
 use mavlink::dialects::development::*;
@@ -18,20 +21,9 @@ fn datagrams(vehicles: u8) -> Vec<Vec<u8>> {
     let mut seq = 0u8;
     for tick in 0..10u32 {
         for sys in 1..=vehicles {
-            let mut push = |m: MavMessage| {
-                seq = seq.wrapping_add(1);
-                let h = MavHeader { system_id: u32::from(sys), component_id: 1, sequence: seq };
-                out.push(encode_v2(h, &m));
-            };
+            let mut push = |m: MavMessage| out.push(telemetry::datagram(sys, &mut seq, &m));
             if tick == 0 {
-                push(MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-                    custom_mode: 4,
-                    mavtype: MavType::MAV_TYPE_QUADROTOR,
-                    autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
-                    base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-                    system_status: MavState::MAV_STATE_ACTIVE,
-                    mavlink_version: 3,
-                }));
+                push(telemetry::copter_heartbeat());
                 push(MavMessage::SYS_STATUS(SYS_STATUS_DATA {
                     voltage_battery: 12600,
                     battery_remaining: 80,

@@ -20,10 +20,10 @@
 
 #[path = "../runtime/video/tests/peer/mod.rs"]
 mod peer;
+#[path = "common/telemetry.rs"]
+mod telemetry;
 
-use mavlink::MavHeader;
 use mavlink::dialects::development::*;
-use mocu_mavlink::encode_v2;
 use peer::{Ffmpeg, Kind};
 use std::net::UdpSocket;
 use std::path::{Path, PathBuf};
@@ -43,18 +43,9 @@ fn send_telemetry(to: std::net::SocketAddr, stop: Arc<AtomicBool>) -> std::threa
         let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
         let mut seq = 0u8;
         let mut send = |sys: u8, m: MavMessage| {
-            seq = seq.wrapping_add(1);
-            let h = MavHeader { system_id: u32::from(sys), component_id: 1, sequence: seq };
-            let _ = sock.send_to(&encode_v2(h, &m), to);
+            let _ = sock.send_to(&telemetry::datagram(sys, &mut seq, &m), to);
         };
-        let heartbeat = MavMessage::HEARTBEAT(HEARTBEAT_DATA {
-            custom_mode: 4,
-            mavtype: MavType::MAV_TYPE_QUADROTOR,
-            autopilot: MavAutopilot::MAV_AUTOPILOT_ARDUPILOTMEGA,
-            base_mode: MavModeFlag::MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
-            system_status: MavState::MAV_STATE_ACTIVE,
-            mavlink_version: 3,
-        });
+        let heartbeat = telemetry::copter_heartbeat();
         for _ in 0..3 {
             for sys in 1..=VEHICLES {
                 send(sys, heartbeat.clone());
