@@ -162,8 +162,12 @@ impl Translator {
             self.batch.push(id, s.seq, t, kind, x);
             return Ok(());
         }
-        if let Change::Deleted { object } = s.change {
-            self.forget_place(object)?;
+        if let Change::Deleted { object } = s.change
+            && !self.places.is_empty()
+        {
+            for g in self.world.subtree(object) {
+                self.forget_place(g)?;
+            }
         }
         let b = &mut self.buf;
         b.clear();

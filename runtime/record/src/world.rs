@@ -176,6 +176,19 @@ impl World {
         self.repath(g);
     }
 
+    /// `g` and every object under it.
+    pub fn subtree(&self, g: Guid) -> Vec<Guid> {
+        let mut out = Vec::new();
+        let mut stack = vec![g];
+        while let Some(x) = stack.pop() {
+            if let Some(o) = self.objects.get(&x) {
+                out.push(x);
+                stack.extend(o.children.iter().copied());
+            }
+        }
+        out
+    }
+
     pub fn delete(&mut self, g: Guid) {
         let parent = self.objects.get(&g).and_then(|o| o.parent);
         if let Some(p) = parent.and_then(|p| self.objects.get_mut(&p)) {

@@ -375,7 +375,8 @@ fn a_moving_object_gets_a_location_fix_at_most_every_100_ms_and_always_its_last_
     let (ds, clock) = manual();
     let rec = Recorder::start(&ds, &file, Header::default()).unwrap();
     let nav = ds.create_object(ds.root(), ObjectInfo::new("nav", "nav")).unwrap();
-    let gone = ds.create_object(ds.root(), ObjectInfo::new("gone", "nav")).unwrap();
+    let vehicle = ds.create_object(ds.root(), ObjectInfo::new("gone", "vehicle")).unwrap();
+    let gone = ds.create_object(vehicle, ObjectInfo::new("nav", "nav")).unwrap();
     // 100 Hz for a quarter of a second, then still.
     let lat = |i: u64| 30.0 + i as f64 * 0.001;
     for i in 0..=25 {
@@ -383,11 +384,11 @@ fn a_moving_object_gets_a_location_fix_at_most_every_100_ms_and_always_its_last_
         ds.set(nav, "lon", Value::Float(-117.0)).unwrap();
         clock.advance(ms(10));
     }
-    // A position that waits for its fix when its object is deleted: written first.
+    // A position that waits for its fix when the object above it is deleted: written first.
     ds.set(gone, "lat", Value::Float(1.0)).unwrap();
     ds.set(gone, "lon", Value::Float(2.0)).unwrap();
     ds.set(gone, "lat", Value::Float(1.5)).unwrap();
-    ds.delete_object(gone).unwrap();
+    ds.delete_object(vehicle).unwrap();
     rec.finish().unwrap();
     let msgs = read(&file);
     let fixes = |topic| -> Vec<(u64, f64, f64)> {
@@ -403,7 +404,11 @@ fn a_moving_object_gets_a_location_fix_at_most_every_100_ms_and_always_its_last_
     // position (250 ms) when the recording ends.
     let want: Vec<_> = [0, 10, 20, 25].map(|i| (i * 10, lat(i), -117.0)).into();
     assert_eq!(fixes("/location/root.nav"), want);
-    assert_eq!(fixes("/location/root.gone"), vec![(260, 1.0, 2.0), (260, 1.5, 2.0)]);
+    assert_eq!(fixes("/location/root.gone.nav"), vec![(260, 1.0, 2.0), (260, 1.5, 2.0)]);
+    assert!(
+        msgs.iter().all(|(topic, _, _)| !topic.starts_with("/location/#")),
+        "no fix of a deleted object"
+    );
     // Every position is recorded all the same: each property's first value where it is
     // created (`/world/property`), every later one in the batches.
     let later = on(&msgs, "/world/values").iter().filter(|(_, _, j)| j["kind"] == "float").count();

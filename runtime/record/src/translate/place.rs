@@ -114,7 +114,7 @@ impl Translator {
         Ok(())
     }
 
-    /// `object` is deleted: its waiting fix is written first.
+    /// `object` is deleted (itself or an object above it): its waiting fix is written first.
     pub(super) fn forget_place(&mut self, object: Guid) -> Result<(), String> {
         if self.places.get(&object).is_some_and(|p| p.waiting) {
             self.write_fix(object)?;
