@@ -90,8 +90,9 @@ impl Translator {
     /// The fix of `object`'s position as last changed, stamped with that change.
     pub(super) fn write_fix(&mut self, object: Guid) -> Result<(), String> {
         let Some(p) = self.places.get_mut(&object) else { return Ok(()) };
-        let Some((lat, lon, alt)) = p.fix() else { return Ok(()) };
+        // No longer waiting, even without a fix to write: a later change waits afresh.
         p.waiting = false;
+        let Some((lat, lon, alt)) = p.fix() else { return Ok(()) };
         p.next = p.t.saturating_add(FIX_EVERY_NS);
         let (seq, t) = (p.seq, p.t);
         let path = self.world.path(object);
