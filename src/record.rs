@@ -22,6 +22,25 @@ pub fn start(
     start_with(ds, path, &name, Some(&target.bundle), layout, manual_clock)
 }
 
+/// Ends the recording (`--record FILE`) and says on stderr what it holds, or why it
+/// failed (`command`: `mocu run`, `mocu serve`).
+pub fn finish(recorder: &Recorder, file: &Path, command: &str) {
+    match recorder.finish() {
+        Ok(t) => {
+            let mb = |b: u64| b as f64 / 1e6;
+            let on_disk = std::fs::metadata(file).map_or(0, |m| m.len());
+            eprintln!(
+                "mocu: recorded {} messages to {} ({:.1} MB, {:.1} MB before compression)",
+                t.messages,
+                file.display(),
+                mb(on_disk),
+                mb(t.bytes)
+            );
+        }
+        Err(e) => eprintln!("{command}: --record: {e}"),
+    }
+}
+
 /// [`start`] for what may have no layout: `mocu serve`'s adapter records its world model
 /// with the profile's bundle when it has one (a replay shows it through its first layout,
 /// or through `--layout`), with none otherwise.

@@ -376,13 +376,8 @@ pub fn main(args: RunArgs) -> ExitCode {
     host.stop_all();
     ds.quiesce();
     drain_events(&events, &sink);
-    if let Some(r) = &recorder {
-        match r.finish() {
-            Ok(t) => {
-                eprintln!("mocu: recorded {} messages ({} bytes of JSON)", t.messages, t.bytes)
-            }
-            Err(e) => eprintln!("mocu run: --record: {e}"),
-        }
+    if let (Some(r), Some(file)) = (&recorder, &args.record) {
+        crate::record::finish(r, file, "mocu run");
     }
     drop(guard);
     ExitCode::from(code)

@@ -185,13 +185,8 @@ pub fn main(args: ServeArgs) -> ExitCode {
     for e in events.try_iter() {
         report(e, &sink);
     }
-    if let Some(r) = &recorder {
-        match r.finish() {
-            Ok(t) => {
-                eprintln!("mocu: recorded {} messages ({} bytes of JSON)", t.messages, t.bytes)
-            }
-            Err(e) => eprintln!("mocu serve: --record: {e}"),
-        }
+    if let (Some(r), Some(file)) = (&recorder, &args.record) {
+        crate::record::finish(r, file, "mocu serve");
     }
     drop(guard);
     ExitCode::SUCCESS
