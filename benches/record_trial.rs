@@ -285,15 +285,22 @@ fn main() {
             sum.1 += wall;
         };
         let mut recorded = String::new();
+        let mut rounds_ratio: Vec<String> = Vec::new();
         for round in 0..rounds {
             let file: PathBuf = dir.path().join(format!("trial{round}.mcap"));
             // Alternated, and in turn first: a drift of the machine's load weighs on both.
+            let mut this = [(0.0, 0.0); 2];
             for recording in [round % 2 == 1, round % 2 == 0] {
                 if only_recording.is_some_and(|r| r != recording) {
                     continue;
                 }
-                let into = if recording { &mut rec } else { &mut base };
-                add(into, ocu(which, secs, &ports, recording.then_some(&*file), dir.path()));
+                let run = ocu(which, secs, &ports, recording.then_some(&*file), dir.path());
+                add(if recording { &mut rec } else { &mut base }, run);
+                this[usize::from(recording)] = run;
+            }
+            let [(b_cpu, b_wall), (r_cpu, r_wall)] = this;
+            if b_cpu > 0.0 && r_cpu > 0.0 {
+                rounds_ratio.push(format!("{:.3}", (r_cpu / r_wall) / (b_cpu / b_wall)));
             }
             if only_recording == Some(false) {
                 continue;
@@ -315,6 +322,7 @@ fn main() {
             rec.1 / f64::from(rounds),
             per_s(rec) / per_s(base)
         );
+        eprintln!("  {name:10}  each round: {}x", rounds_ratio.join("x, "));
         eprintln!("  {name:10}  recorded: {recorded}");
     }
     stop.store(true, Ordering::Relaxed);
