@@ -134,14 +134,18 @@ fn cpu_at_exit(child: &mut Child) -> (f64, bool) {
     (ticks as f64 / clock_ticks() as f64, ok)
 }
 
-/// The kernel's clock ticks a second (`getconf CLK_TCK`; 100 where it cannot be asked).
+/// The kernel's clock ticks a second (`getconf CLK_TCK`, asked once; 100 where it cannot
+/// be asked).
 fn clock_ticks() -> u64 {
-    Command::new("getconf")
-        .arg("CLK_TCK")
-        .output()
-        .ok()
-        .and_then(|o| String::from_utf8_lossy(&o.stdout).trim().parse().ok())
-        .unwrap_or(100)
+    static TICKS: std::sync::OnceLock<u64> = std::sync::OnceLock::new();
+    *TICKS.get_or_init(|| {
+        Command::new("getconf")
+            .arg("CLK_TCK")
+            .output()
+            .ok()
+            .and_then(|o| String::from_utf8_lossy(&o.stdout).trim().parse().ok())
+            .unwrap_or(100)
+    })
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

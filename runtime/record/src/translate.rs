@@ -464,7 +464,6 @@ impl Translator {
     }
 
     pub fn flush(&mut self) -> Result<(), String> {
-        self.due_fixes(self.last_time)?;
         self.write_values()?;
         self.out.flush()
     }

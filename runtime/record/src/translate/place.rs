@@ -68,23 +68,20 @@ impl Translator {
 
     /// Writes the fixes that waited and whose time has come by `now` (every one that
     /// waited, with `now` = `u64::MAX`).
-    pub(crate) fn due_fixes(&mut self, now: u64) -> Result<(), String> {
-        let mut waiting = std::mem::take(&mut self.waiting_fixes);
-        let mut result = Ok(());
-        waiting.retain(|&object| {
-            let Some(p) = self.places.get(&object) else { return false };
-            if !p.waiting || result.is_err() {
-                return p.waiting;
+    pub(super) fn due_fixes(&mut self, now: u64) -> Result<(), String> {
+        let places = &self.places;
+        let (due, later): (Vec<Guid>, Vec<Guid>) = std::mem::take(&mut self.waiting_fixes)
+            .into_iter()
+            .filter(|object| places.get(object).is_some_and(|p| p.waiting))
+            .partition(|object| places[object].next <= now);
+        self.waiting_fixes = later;
+        for object in due {
+            // Listed again if it waited again after a fix written at once: written once.
+            if self.places.get(&object).is_some_and(|p| p.waiting) {
+                self.write_fix(object)?;
             }
-            if p.next > now {
-                return true;
-            }
-            result = self.write_fix(object);
-            false
-        });
-        waiting.append(&mut self.waiting_fixes);
-        self.waiting_fixes = waiting;
-        result
+        }
+        Ok(())
     }
 
     /// The fix of `object`'s position as last changed, stamped with that change.
