@@ -4,6 +4,7 @@
 //! `--deny warnings`); 2: usage or I/O error. The contract is in docs/language.md.
 
 mod scripts;
+mod settings;
 
 use mocu_language::project::{self, Project};
 use mocu_language::{FileKind, FsLoader, Severity, SourceLoader, SourceMap, render};
@@ -108,7 +109,12 @@ pub fn main(args: CheckArgs) -> ExitCode {
             if kind == FileKind::Profile {
                 scripts::check(&path, &text, &mut sources, &mut diags);
             }
-            mocu_language::lint_path(&path, text, &FsLoader, &mut sources, &mut diags);
+            let errors = diags.count(Severity::Error);
+            mocu_language::lint_path(&path, text.clone(), &FsLoader, &mut sources, &mut diags);
+            // The modules' own rules, once the profile's shape and types hold (no error twice).
+            if kind == FileKind::Profile && diags.count(Severity::Error) == errors {
+                settings::check(&path, &text, &mut sources, &mut diags);
+            }
             continue;
         }
         let profile = explicit.clone().or_else(|| project::discover(&path, &FsLoader));

@@ -281,7 +281,8 @@ pub fn main(args: RunArgs) -> ExitCode {
     let _ = mocu_display::ensure_display_object(&ds, screen.0, screen.1);
     let mut host = ModuleHost::new(ds.clone(), crate::core_modules::registry(components.clone()));
     let events = host.events();
-    host.start_all(&module_specs(&target, &args));
+    let specs = module_specs(&target, &args);
+    let required_failed = required_failures(&specs, &host.start_all(&specs));
     // The layout runs under the reloader: a saved edit swaps in between two frames, its
     // components into the widget renderer.
     let hook = Some(crate::core_modules::reload_hook(components, jit));
@@ -356,6 +357,13 @@ pub fn main(args: RunArgs) -> ExitCode {
     if !ran_window {
         code = run_headless(&ds, &args, screen, &events, &sink, &stop, stepped.as_ref());
     }
+    if code == 0 && !required_failed.is_empty() {
+        eprintln!(
+            "mocu run: exit 1: {} did not start (mark a module `optional = true` in the profile to run without it)",
+            required_failed.join(", ")
+        );
+        code = 1;
+    }
 
     // The outputs first, with the display and the layout still live (`--dump
     // root.display` shows the display as it was), then the teardown, bounded.
@@ -381,6 +389,30 @@ pub fn main(args: RunArgs) -> ExitCode {
     }
     drop(guard);
     ExitCode::from(code)
+}
+
+/// The modules that failed to start and are not marked `optional = true`: the run goes on
+/// (the operator sees what is there), and exits 1 at its end.
+fn required_failures(specs: &[ModuleSpec], errors: &[mocu_host::StartError]) -> Vec<String> {
+    use mocu_host::StartError::*;
+    errors
+        .iter()
+        .map(|e| match e {
+            UnknownKind { module, .. }
+            | DuplicateName { module }
+            | Failed { module, .. }
+            | Panicked { module, .. } => module,
+        })
+        .filter(|m| {
+            let optional = specs
+                .iter()
+                .find(|s| &s.name == *m)
+                .and_then(|s| s.settings.get("optional"))
+                .and_then(toml::Value::as_bool);
+            optional != Some(true)
+        })
+        .map(|m| format!("module `{m}`"))
+        .collect()
 }
 
 /// Every component of every layout of the bundle, once (the first definition wins).

@@ -1,5 +1,5 @@
-//! How `mocu run` ends. SIGINT (Ctrl-C) and SIGTERM ask the frame loop (headless or
-//! windowed) to stop; the run then writes `--screenshot`, `--dump` and `--log` before it
+//! How `mocu run` ends. SIGINT (Ctrl-C), SIGTERM and SIGHUP (the terminal or the SSH session
+//! that ran it closed) ask the frame loop (headless or windowed) to stop; the run then writes `--screenshot`, `--dump` and `--log` before it
 //! stops the modules. The shutdown a signal starts is bounded: if the process is still there
 //! [`SIGNAL_BOUND`] after the first signal (outputs stuck, a module that will not stop, a machine
 //! under load), it exits with 128 + the signal. A second signal ends the process at once,
@@ -8,8 +8,9 @@
 
 use crossbeam_channel::{Receiver, Sender, bounded, never};
 use mocu_display::WindowStop;
-use signal_hook::consts::{SIGINT, SIGTERM};
+use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
 use signal_hook::iterator::Signals;
+use std::io::Write;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -29,7 +30,10 @@ pub struct Stop {
     pub window: WindowStop,
 }
 
-/// Starts listening for SIGINT and SIGTERM. Where they cannot be caught, the run still
+/// The signals that stop a run, each handled the same way.
+const STOP_SIGNALS: [i32; 3] = [SIGINT, SIGTERM, SIGHUP];
+
+/// Starts listening for SIGINT, SIGTERM and SIGHUP. Where they cannot be caught, the run still
 /// ends with `--frames` or by closing its window (and says so).
 pub fn on_signals() -> Stop {
     let window = WindowStop::new();
@@ -37,7 +41,9 @@ pub fn on_signals() -> Stop {
     match listen(tx, window.clone()) {
         Ok(()) => Stop { requests: rx, window },
         Err(e) => {
-            eprintln!("mocu: cannot catch SIGINT/SIGTERM ({e}); Ctrl-C ends the run abruptly");
+            eprintln!(
+                "mocu: cannot catch SIGINT/SIGTERM/SIGHUP ({e}); Ctrl-C ends the run abruptly"
+            );
             Stop { requests: never(), window }
         }
     }
@@ -46,21 +52,26 @@ pub fn on_signals() -> Stop {
 fn listen(tx: Sender<()>, window: WindowStop) -> std::io::Result<()> {
     // In the handler, in this order: exit if a signal came before, then remember this one.
     let armed = Arc::new(AtomicBool::new(false));
-    for sig in [SIGINT, SIGTERM] {
+    for sig in STOP_SIGNALS {
         signal_hook::flag::register_conditional_shutdown(sig, 128 + sig, armed.clone())?;
         signal_hook::flag::register(sig, armed.clone())?;
     }
-    let mut signals = Signals::new([SIGINT, SIGTERM])?;
+    let mut signals = Signals::new(STOP_SIGNALS)?;
     std::thread::Builder::new().name("mocu-signals".into()).spawn(move || {
         if let Some(sig) = signals.forever().next() {
-            let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
-            eprintln!("mocu: {name}: stopping (send it again to exit at once)");
+            let name = signal_name(sig);
+            // After SIGHUP the terminal may be gone: a failed write must not end this thread.
+            let _ = writeln!(
+                std::io::stderr(),
+                "mocu: {name}: stopping (send it again to exit at once)"
+            );
             let _ = tx.try_send(());
             window.stop();
             // The shutdown is bounded from here, whatever it waits for.
             let (_never, wait) = bounded::<()>(0);
             let _ = wait.recv_timeout(SIGNAL_BOUND);
-            eprintln!(
+            let _ = writeln!(
+                std::io::stderr(),
                 "mocu: still stopping {} s after {name} (outputs or a module stuck); exiting",
                 SIGNAL_BOUND.as_secs()
             );
@@ -68,6 +79,14 @@ fn listen(tx: Sender<()>, window: WindowStop) -> std::io::Result<()> {
         }
     })?;
     Ok(())
+}
+
+fn signal_name(sig: i32) -> &'static str {
+    match sig {
+        SIGINT => "SIGINT",
+        SIGHUP => "SIGHUP",
+        _ => "SIGTERM",
+    }
 }
 
 /// Ends the process with `code` if the returned guard is still alive after [`GRACE`]:

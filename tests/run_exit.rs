@@ -100,8 +100,8 @@ fn windows_in(dump: &serde_json::Value) -> Vec<String> {
 }
 
 #[test]
-fn sigterm_and_sigint_end_a_run_after_it_wrote_the_dump_the_log_and_the_screenshot() {
-    for signal in ["TERM", "INT"] {
+fn sigterm_sigint_and_sighup_end_a_run_after_it_wrote_the_dump_the_log_and_the_screenshot() {
+    for signal in ["TERM", "INT", "HUP"] {
         let (mut child, files) = mocu_run(&[]);
         let err = lines(&mut child);
         let seen = wait_running(&err);

@@ -95,6 +95,12 @@ pub const COMMON: &[Setting] = &[
         "false: the module is not started; naming a core module (input, window_manager, widgets, map_view, video_windows) turns it off",
     ),
     s(
+        "optional",
+        Bool,
+        "false",
+        "true: the run goes on without this module if it cannot start, and exits 0; otherwise a module that fails to start makes `mocu run` exit 1",
+    ),
+    s(
         "order",
         Int,
         "after the others",
@@ -124,7 +130,7 @@ pub const MODULES: &[ModuleKind] = &[
             s("uav", Int, "1", "How many air vehicles (uav1, …), when `vehicles` is not given"),
             s("seed", Int, "1", "Random seed: the same seed gives the same run"),
             s("appear_every", Number, "0.5", "Seconds between two vehicles appearing"),
-            s("rate_hz", Number, "20", "Simulation steps per second, in (0, 1000]"),
+            s("rate_hz", Number, "20", "Simulation steps per second, 0.01 to 1000"),
             s("camera_fps", Number, "10", "Simulated camera frames per second"),
             s("camera_width", Int, "640", "Simulated camera width in px, 1 to 1920"),
             s("camera_height", Int, "480", "Simulated camera height in px, 1 to 1080"),

@@ -534,7 +534,8 @@ impl Arbiter {
 }
 
 /// The arbitration settings of a `distrib` spec: `None` when `control = false`, or when the
-/// site shares no `vehicles` and `control` is not set.
+/// site shares no `vehicles` and `control` is not set. The settings are checked either way:
+/// a misspelt policy is an error, not a setting silently ignored.
 pub fn settings_from(
     spec: &mocu_host::ModuleSpec,
     share: &[String],
@@ -542,9 +543,6 @@ pub fn settings_from(
     let shares_vehicles =
         share.iter().any(|s| crate::object_path(s).first().is_some_and(|f| f == "vehicles"));
     let on = spec.bool_or("control", shares_vehicles).map_err(|e| e.to_string())?;
-    if !on {
-        return Ok(None);
-    }
     let d = Settings::default();
     let policy = |key: &str, text: &str| {
         Takeover::parse(text).ok_or_else(|| {
@@ -569,13 +567,14 @@ pub fn settings_from(
         "closed" => false,
         other => return Err(format!("`free`: `{other}` is neither `open` nor `closed`")),
     };
-    Ok(Some(Settings {
+    let settings = Settings {
         takeover,
         vehicles,
         open_when_free,
         release_after: crate::module::millis(spec, "release_after_ms", 5_000)?,
         ask_timeout: crate::module::millis(spec, "ask_timeout_ms", 8_000)?,
-    }))
+    };
+    Ok(on.then_some(settings))
 }
 
 #[cfg(test)]

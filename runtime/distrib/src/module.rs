@@ -27,6 +27,20 @@ pub(crate) fn names(spec: &ModuleSpec, key: &str) -> Result<Vec<String>, String>
     }
 }
 
+/// Zenoh endpoints (`tcp/127.0.0.1:7447`, `tls/host:7447`), each parsed as Zenoh parses it
+/// when the session opens: a malformed one is a settings error `mocu check` reports.
+fn endpoints(spec: &ModuleSpec, key: &str) -> Result<Vec<String>, String> {
+    let list = names(spec, key)?;
+    for e in &list {
+        if let Err(why) = e.parse::<zenoh::config::EndPoint>() {
+            return Err(format!(
+                "`{key}`: `{e}` is not a Zenoh endpoint such as tcp/127.0.0.1:7447 ({why})"
+            ));
+        }
+    }
+    Ok(list)
+}
+
 pub(crate) fn millis(spec: &ModuleSpec, key: &str, default: i64) -> Result<Duration, String> {
     let ms = spec.i64_or(key, default).map_err(|e| e.to_string())?;
     if !(1..=3_600_000).contains(&ms) {
@@ -51,8 +65,8 @@ pub fn config_from(spec: &ModuleSpec) -> Result<(Config, Duration), String> {
     let config = Config {
         site,
         operator,
-        listen: names(spec, "listen")?,
-        connect: names(spec, "connect")?,
+        listen: endpoints(spec, "listen")?,
+        connect: endpoints(spec, "connect")?,
         control: crate::arbiter::settings_from(spec, &share)?,
         share,
         call_timeout: millis(spec, "call_timeout_ms", 10_000)?,

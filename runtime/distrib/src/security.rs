@@ -110,7 +110,14 @@ pub fn from_spec(spec: &ModuleSpec) -> Result<Security, String> {
     let files = [file("tls_ca")?, file("tls_cert")?, file("tls_key")?];
     let tls = match files {
         [None, None, None] => None,
-        [Some(ca), Some(cert), Some(key)] => Some(Tls { ca, cert, key }),
+        [Some(ca), Some(cert), Some(key)] => {
+            for (k, f) in [("tls_ca", &ca), ("tls_cert", &cert), ("tls_key", &key)] {
+                if !f.is_file() {
+                    return Err(format!("`{k}`: no file `{}`", f.display()));
+                }
+            }
+            Some(Tls { ca, cert, key })
+        }
         [ca, cert, _] => {
             let missing = if ca.is_none() {
                 "tls_ca"

@@ -48,6 +48,22 @@ impl Registry {
     pub fn kinds(&self) -> impl Iterator<Item = &str> {
         self.kinds.keys().map(|k| k.as_str())
     }
+
+    /// Makes the module `spec` names from its settings, without starting it: the settings
+    /// checked by the module's own factory, as `mocu check` does for a profile and the host
+    /// does before `start`.
+    pub fn make(&self, spec: &ModuleSpec) -> Result<Box<dyn Module>, StartError> {
+        let module = spec.name.clone();
+        let Some(factory) = self.kinds.get(&spec.kind) else {
+            let known = self.kinds().map(str::to_string).collect();
+            return Err(StartError::UnknownKind { module, kind: spec.kind.clone(), known });
+        };
+        match catch_unwind(AssertUnwindSafe(|| factory(spec))) {
+            Ok(Ok(m)) => Ok(m),
+            Ok(Err(reason)) => Err(StartError::Failed { module, reason }),
+            Err(p) => Err(StartError::Panicked { module, message: panic_message(&*p) }),
+        }
+    }
 }
 
 /// Why a module did not start.
@@ -148,10 +164,10 @@ impl ModuleHost {
         if self.running.iter().any(|r| *r.ctx.name == *spec.name) {
             return Err(StartError::DuplicateName { module });
         }
-        let Some(factory) = self.registry.kinds.get(&spec.kind) else {
+        if !self.registry.kinds.contains_key(&spec.kind) {
             let known = self.registry.kinds().map(str::to_string).collect();
             return Err(StartError::UnknownKind { module, kind: spec.kind.clone(), known });
-        };
+        }
         let status = crate::world::ensure_path(&self.ds, &["modules", &spec.name], "module")
             .map_err(|e| StartError::Failed { module: module.clone(), reason: e.to_string() })?;
         let _ = self.ds.set(status, "kind", Value::str(&spec.kind));
@@ -167,17 +183,15 @@ impl ModuleHost {
             let _ = self.ds.set(status, "state", Value::str(state));
             let _ = self.ds.set(status, "error", Value::str(why));
         };
-        let made = catch_unwind(AssertUnwindSafe(|| factory(spec)));
-        let mut m = match made {
-            Ok(Ok(m)) => m,
-            Ok(Err(reason)) => {
-                fail("failed", &reason);
-                return Err(StartError::Failed { module, reason });
-            }
-            Err(p) => {
-                let message = panic_message(&*p);
-                fail("panicked", &message);
-                return Err(StartError::Panicked { module, message });
+        let mut m = match self.registry.make(spec) {
+            Ok(m) => m,
+            Err(e) => {
+                match &e {
+                    StartError::Failed { reason, .. } => fail("failed", reason),
+                    StartError::Panicked { message, .. } => fail("panicked", message),
+                    _ => {}
+                }
+                return Err(e);
             }
         };
         match catch_unwind(AssertUnwindSafe(|| m.start(&ctx))) {

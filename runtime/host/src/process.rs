@@ -78,6 +78,13 @@ impl ProcessModule {
                     .into());
             }
         };
+        if !on_path(&command[0]) {
+            return Err(format!(
+                "`command`: no program `{}` on PATH (a misspelt name? give a path with a `/` \
+                 for a program elsewhere)",
+                command[0]
+            ));
+        }
         let ms = |key: &str, default: i64| -> Result<Duration, String> {
             let v = spec.i64_or(key, default).map_err(|e| e.to_string())?;
             if !(1..=86_400_000).contains(&v) {
@@ -93,6 +100,20 @@ impl ProcessModule {
         let connect = spec.str_or("connect", "").map_err(|e| e.to_string())?;
         Ok(ProcessModule { command, connect, backoff, max_backoff, sup: None })
     }
+}
+
+/// Whether `program` can be started: a path (with a `/`, as the process will be started
+/// with it) is taken as given; a bare name must be an executable file in one of PATH's folders.
+fn on_path(program: &str) -> bool {
+    use std::os::unix::fs::PermissionsExt;
+    if program.contains('/') {
+        return true;
+    }
+    let Some(path) = std::env::var_os("PATH") else { return true };
+    std::env::split_paths(&path).any(|dir| {
+        std::fs::metadata(dir.join(program))
+            .is_ok_and(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+    })
 }
 
 impl Module for ProcessModule {

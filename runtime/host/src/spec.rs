@@ -129,6 +129,22 @@ impl ModuleSpec {
         }
     }
 
+    /// A UDP/TCP socket address setting, `IP:PORT` (`0.0.0.0:14550`, `[::1]:5600`): refused
+    /// here, where `mocu check` sees it, rather than when the module binds it.
+    pub fn socket_addr_or(
+        &self,
+        key: &str,
+        default: &str,
+    ) -> Result<std::net::SocketAddr, SpecError> {
+        let text = self.str_or(key, default)?;
+        text.parse().map_err(|_| {
+            SpecError(format!(
+                "module `{}`: `{key}` `{text}` is not IP:PORT (e.g. 0.0.0.0:14550)",
+                self.name
+            ))
+        })
+    }
+
     pub fn table(&self, key: &str) -> Result<Option<&toml::Table>, SpecError> {
         match self.settings.get(key) {
             None => Ok(None),

@@ -69,8 +69,8 @@ impl MavlinkModule {
     /// (docs/mavlink.md).
     pub fn from_spec(spec: &ModuleSpec) -> Result<MavlinkModule, String> {
         let cfg = LinkConfig::from_spec(spec)?;
-        let address = spec.str_or("address", DEFAULT_ADDRESS).map_err(|e| e.to_string())?;
-        Ok(MavlinkModule::new(&address, cfg))
+        let address = spec.socket_addr_or("address", DEFAULT_ADDRESS).map_err(|e| e.to_string())?;
+        Ok(MavlinkModule::new(&address.to_string(), cfg))
     }
 
     pub fn link(&self) -> Option<&Link> {

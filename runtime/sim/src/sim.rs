@@ -85,8 +85,14 @@ impl SimConfig {
             autostart: spec.bool_or("autostart", d.autostart).map_err(|e| e.to_string())?,
             names: names(spec)?,
         };
-        if !(cfg.rate_hz > 0.0 && cfg.rate_hz <= 1000.0) {
-            return Err(format!("module `{}`: `rate_hz` must be in (0, 1000]", spec.name));
+        if !(0.01..=1000.0).contains(&cfg.rate_hz) {
+            return Err(format!("module `{}`: `rate_hz` must be in 0.01..=1000", spec.name));
+        }
+        if !(-90.0..=90.0).contains(&cfg.origin.0) || !(-180.0..=180.0).contains(&cfg.origin.1) {
+            return Err(format!(
+                "module `{}`: `origin_lat` must be in -90..=90 and `origin_lon` in -180..=180",
+                spec.name
+            ));
         }
         if !(1..=MAX_CAMERA.0).contains(&cfg.camera_width)
             || !(1..=MAX_CAMERA.1).contains(&cfg.camera_height)

@@ -59,10 +59,7 @@ impl Default for ReceiverConfig {
 impl ReceiverConfig {
     pub fn from_spec(spec: &ModuleSpec) -> Result<ReceiverConfig, String> {
         let e = |x: mocu_host::SpecError| x.to_string();
-        let addr = spec.str_or("address", DEFAULT_ADDRESS).map_err(e)?;
-        let address = addr
-            .parse()
-            .map_err(|_| format!("module `{}`: `address` `{addr}` is not HOST:PORT", spec.name))?;
+        let address = spec.socket_addr_or("address", DEFAULT_ADDRESS).map_err(e)?;
         let camera = spec.str_or("camera", "").map_err(e)?;
         let bad = |k: &str, want: &str| format!("module `{}`: `{k}` must be {want}", spec.name);
         let src = spec.str_or("source", "any").map_err(e)?;
