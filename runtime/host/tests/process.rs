@@ -103,13 +103,18 @@ fn settings_are_checked() {
         (ModuleSpec::new("process").with("command", toml::Value::Array(vec![])), "needs"),
         (
             ModuleSpec::new("process")
-                .with("command", toml::Value::Array(vec!["x".into()]))
+                .with("command", toml::Value::Array(vec!["pythno3".into(), "x.py".into()])),
+            "no program `pythno3` on PATH",
+        ),
+        (
+            ModuleSpec::new("process")
+                .with("command", toml::Value::Array(vec!["true".into()]))
                 .with("restart_backoff_ms", 0),
             "`restart_backoff_ms` must be",
         ),
         (
             ModuleSpec::new("process")
-                .with("command", toml::Value::Array(vec!["x".into()]))
+                .with("command", toml::Value::Array(vec!["true".into()]))
                 .with("restart_backoff_ms", 1000)
                 .with("max_backoff_ms", 10),
             "at least",

@@ -63,7 +63,8 @@ pub fn scan_bindings(ds: &DataServer, container: Guid) -> Vec<BindingDef> {
             kind: s("kind"),
             input: s("input"),
             event: s("event"),
-            hold: Duration::from_secs_f64(f("hold_ms", 0.0).max(0.0) / 1000.0),
+            hold: Duration::try_from_secs_f64(f("hold_ms", 0.0).max(0.0) / 1000.0)
+                .unwrap_or(Duration::MAX),
             mode: opt("mode"),
             shift: flag("shift"),
             shift_input: opt("shift_input"),

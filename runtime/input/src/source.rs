@@ -64,8 +64,10 @@ impl ScriptedSource {
             let at: f64 = w(0)
                 .and_then(|t| t.trim_end_matches("ms").parse().ok())
                 .ok_or_else(|| err("expected a time in ms first"))?;
-            if !(at >= 0.0 && at.is_finite()) {
-                return Err(err("the time must be >= 0"));
+            // A script's times are a trial's: at most a year (an `Instant` far beyond it
+            // overflows when the script starts).
+            if !(0.0..=MAX_SCRIPT_MS).contains(&at) {
+                return Err(err("the time must be 0 to 31536000000 ms (a year)"));
             }
             let device = w(1).ok_or_else(|| err("expected a device id"))?.to_string();
             let num = |i: usize| -> Result<f64, String> {
@@ -115,6 +117,9 @@ impl ScriptedSource {
             .collect()
     }
 }
+
+/// The latest time an input script may give, in ms: a year.
+const MAX_SCRIPT_MS: f64 = 365.0 * 24.0 * 3600.0 * 1000.0;
 
 /// Words separated by spaces; `"quoted text"` is one word.
 fn split_words(line: &str) -> Vec<String> {
@@ -204,5 +209,17 @@ mod tests {
         assert!(e.contains("line 2"), "{e}");
         assert!(ScriptedSource::parse("x p press south").is_err());
         assert!(ScriptedSource::parse("0 p jump").is_err());
+    }
+
+    #[test]
+    fn a_time_that_is_not_a_number_negative_or_past_a_year_is_an_error_of_its_line() {
+        for t in ["1e30", "nan", "-1", "inf", "31536000001"] {
+            let text = format!("0 p connect gamepad\n{t} p press south\n");
+            let e = ScriptedSource::parse(&text).err().unwrap_or_else(|| panic!("{t} taken"));
+            assert!(e.contains("line 2") && e.contains("the time must be"), "{t}: {e}");
+        }
+        let last = ScriptedSource::parse("31536000000 p press south\n").unwrap();
+        let t0 = Instant::now();
+        assert_eq!(last.events_from(t0)[0].time - t0, Duration::from_secs(31_536_000));
     }
 }

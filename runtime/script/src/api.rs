@@ -142,7 +142,8 @@ impl Api {
     /// Calls `callback` once after `ms` milliseconds of the DataServer's clock.
     pub fn after(&self, ms: f64, callback: CallbackId) -> Result<(), ApiError> {
         self.live()?;
-        let delay = Duration::from_secs_f64(ms.max(0.0) / 1000.0);
+        // NaN and negatives are now; past what a Duration holds, never (the timer saturates).
+        let delay = Duration::try_from_secs_f64(ms.max(0.0) / 1000.0).unwrap_or(Duration::MAX);
         let me = self.clone();
         self.inner.ds.run_after(delay, Some(&self.inner.executor), move || {
             me.invoke(callback, Vec::new(), true);

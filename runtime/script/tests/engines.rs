@@ -153,6 +153,26 @@ fn a_delayed_call_runs_when_the_clock_reaches_it_and_not_before() {
     }
 }
 
+#[test]
+fn a_delay_past_what_a_duration_holds_never_fires_and_a_nan_or_negative_one_is_now() {
+    let case = Case {
+        js: r#"mocu.after(1e30, function () { mocu.write("out.never", true); });
+               mocu.after(Infinity, function () { mocu.write("out.never", true); });
+               mocu.after(NaN, function () { mocu.write("out.nan", true); });
+               mocu.after(-5, function () { mocu.write("out.neg", true); });"#,
+        rhai: r#"mocu::after(1e30, || mocu::write("out.never", true));
+                 mocu::after(-5.0, || mocu::write("out.neg", true));"#,
+    };
+    for (engine, text) in case.each() {
+        let (w, _s) = run(engine, text);
+        let t0 = w.ds.now();
+        w.ds.advance_settled(&w.clock, t0 + Duration::from_secs(3600 * 24 * 365));
+        assert_eq!(w.out("never"), None, "{engine}");
+        assert_eq!(w.out("neg"), Some(Value::Bool(true)), "{engine}");
+        assert!(w.errors.lock().is_empty(), "{engine}: {:?}", w.errors.lock());
+    }
+}
+
 /// Where a runaway is reported: Rhai knows the statement (the loop, on the script's second
 /// line: line 8 of layout.mocu); QuickJS knows the function it was in, here the script's own
 /// body, which starts at 7:20.
