@@ -1,0 +1,92 @@
+//! Tearing things down never runs a module's code under the DataServer's locks: a method
+//! handler (or anything it owns) removed by `unpublish_method` or by deleting its object is
+//! dropped after every lock is released, so its `Drop` may use the DataServer — for example
+//! `unsubscribe_nowait` on a subscription of the same object, as docs/dataserver.md tells
+//! module authors to — without deadlocking. Hangs are turned into failures by a bounded
+//! wait on a channel, never measured.
+mod common;
+use common::*;
+use crossbeam_channel::bounded;
+use mocu_dataserver::*;
+use std::time::Duration;
+
+const EVENTUALLY: Duration = Duration::from_secs(20);
+
+/// What a module's handler owns: its subscription on the object, ended from `Drop`, and a
+/// write to the object (refused or not, it must return).
+struct Owned {
+    ds: DataServer,
+    object: Guid,
+    sub: SubscriptionId,
+}
+
+impl Drop for Owned {
+    fn drop(&mut self) {
+        self.ds.unsubscribe_nowait(self.sub);
+        let _ = self.ds.set(self.object, "dropped", Value::Bool(true));
+    }
+}
+
+/// Runs `scenario` on a thread; fails (instead of hanging) if it does not finish.
+fn finishes(what: &str, scenario: impl FnOnce() + Send + 'static) {
+    let (tx, rx) = bounded(1);
+    std::thread::spawn(move || {
+        scenario();
+        let _ = tx.send(());
+    });
+    rx.recv_timeout(EVENTUALLY).unwrap_or_else(|_| panic!("deadlocked: {what}"));
+}
+
+fn publish_owning_handler(ds: &DataServer, o: Guid) {
+    let sub = ds.subscribe(Topic::properties(o), |_| {}).unwrap();
+    let owned = Owned { ds: ds.clone(), object: o, sub };
+    ds.publish_method_fn(o, MethodSpec::new("m"), move |_| {
+        let _ = &owned;
+        CallOutcome::Accepted(vec![])
+    })
+    .unwrap();
+}
+
+#[test]
+fn unpublishing_a_method_drops_its_handler_after_releasing_the_objects_lock() {
+    let ds = DataServer::default();
+    let o = object(&ds, "o");
+    publish_owning_handler(&ds, o);
+    let d = ds.clone();
+    finishes("unpublish_method dropping a handler that uses its object", move || {
+        d.unpublish_method(o, "m").unwrap();
+    });
+    assert_eq!(ds.get(o, "dropped").unwrap(), Value::Bool(true));
+    assert!(ds.methods(o).unwrap().is_empty());
+}
+
+#[test]
+fn deleting_an_object_drops_its_handlers_after_releasing_every_lock() {
+    let ds = DataServer::default();
+    for (parent_deleted, label) in [(false, "the object"), (true, "its parent")] {
+        let parent = object(&ds, "parent");
+        let o = ds.create_object(parent, ObjectInfo::new("o", "thing")).unwrap();
+        publish_owning_handler(&ds, o);
+        let d = ds.clone();
+        finishes(&format!("deleting {label} of a handler that uses the object"), move || {
+            d.delete_object(if parent_deleted { parent } else { o }).unwrap();
+            // The structure lock is free again: creating an object returns.
+            d.create_object(d.root(), ObjectInfo::new("after", "thing")).unwrap();
+        });
+        assert!(!ds.exists(o));
+    }
+}
+
+#[test]
+fn delete_and_promote_drops_the_deleted_objects_handlers_after_releasing_every_lock() {
+    let ds = DataServer::default();
+    let o = object(&ds, "o");
+    let keep = ds.create_object(o, ObjectInfo::new("keep", "thing")).unwrap();
+    publish_owning_handler(&ds, o);
+    let d = ds.clone();
+    finishes("delete_and_promote dropping a handler that uses the object", move || {
+        d.delete_and_promote(o, keep).unwrap();
+        d.create_object(d.root(), ObjectInfo::new("after", "thing")).unwrap();
+    });
+    assert!(ds.exists(keep));
+}
