@@ -90,3 +90,63 @@ fn delete_and_promote_drops_the_deleted_objects_handlers_after_releasing_every_l
     });
     assert!(ds.exists(keep));
 }
+
+#[test]
+fn dropping_an_object_watch_waits_for_its_first_callback() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let ds = DataServer::default();
+    object(&ds, "a");
+    let (entered_tx, entered) = bounded(1);
+    let (release_tx, release) = bounded::<()>(1);
+    let running = Arc::new(AtomicBool::new(false));
+    let r = running.clone();
+    let w = ds
+        .watch_object(ds.root(), &["a"], None, move |_| {
+            r.store(true, Ordering::SeqCst);
+            let _ = entered_tx.send(());
+            let _ = release.recv_timeout(EVENTUALLY);
+            r.store(false, Ordering::SeqCst);
+        })
+        .unwrap();
+    entered.recv_timeout(EVENTUALLY).expect("the first callback runs");
+    // Released from another thread, which the drop below must wait for.
+    let releaser = std::thread::spawn(move || {
+        for _ in 0..100 {
+            std::thread::yield_now();
+        }
+        let _ = release_tx.send(());
+    });
+    drop(w);
+    assert!(!running.load(Ordering::SeqCst), "drop returned while the first callback ran");
+    releaser.join().unwrap();
+}
+
+#[test]
+fn no_watch_callback_starts_after_cancel_nowait_returned_even_within_one_batch() {
+    use std::sync::{Arc, Mutex};
+    let ds = DataServer::default();
+    let a = object(&ds, "a");
+    let b = object(&ds, "a");
+    let slot: Arc<Mutex<Option<PathWatch>>> = Arc::default();
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let (s, l) = (slot.clone(), log.clone());
+    let w = ds
+        .watch_object(ds.root(), &["a"], None, move |e: &PathEvent| {
+            l.lock().unwrap().push((e.kind, e.object));
+            if e.kind == Kind::Deleted
+                && let Some(w) = s.lock().unwrap().take()
+            {
+                w.cancel_nowait();
+            }
+        })
+        .unwrap();
+    *slot.lock().unwrap() = Some(w);
+    ds.quiesce();
+    // The watch follows the first `a`; deleting it moves the watch to the second: one batch
+    // [Deleted a, New b], cancelled after its first event.
+    ds.delete_object(a).unwrap();
+    ds.quiesce();
+    assert_eq!(*log.lock().unwrap(), vec![(Kind::New, a), (Kind::Deleted, a)]);
+    assert!(ds.exists(b));
+}
