@@ -233,9 +233,13 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
             (false, _) => Topic::Children { object: at },
         };
         let weak = Arc::downgrade(me);
-        let ds2 = ds.clone();
+        // The server only weakly: the subscription lives in the server's registry (and,
+        // once ended, in its deferred reclamation), so a strong handle here would keep the
+        // server, and its threads, alive for ever.
+        let server = Arc::downgrade(&ds.inner);
         let sub = ds.subscribe_on(&st.executor.clone(), topic, move |n| {
-            if let Some(me) = weak.upgrade() {
+            if let (Some(me), Some(inner)) = (weak.upgrade(), server.upgrade()) {
+                let ds2 = DataServer { inner };
                 let events = {
                     let mut st = me.lock();
                     on_notification(&ds2, &me, &mut st, j, generation, n)

@@ -150,3 +150,32 @@ fn no_watch_callback_starts_after_cancel_nowait_returned_even_within_one_batch()
     assert_eq!(*log.lock().unwrap(), vec![(Kind::New, a), (Kind::Deleted, a)]);
     assert!(ds.exists(b));
 }
+
+/// Signals when dropped.
+struct Guard(crossbeam_channel::Sender<()>);
+
+impl Drop for Guard {
+    fn drop(&mut self) {
+        let _ = self.0.send(());
+    }
+}
+
+#[test]
+fn a_server_whose_path_watch_was_dropped_is_freed_with_its_last_handle() {
+    let ds = DataServer::default();
+    let o = object(&ds, "a");
+    ds.set(o, "x", Value::Int(1)).unwrap();
+    let (freed_tx, freed) = bounded(1);
+    let guard = Guard(freed_tx);
+    // Freed only with the server: the subscription stays until then.
+    ds.subscribe(Topic::properties(ds.root()), move |_| {
+        let _ = &guard;
+    })
+    .unwrap();
+    let w = ds.watch_path(DottedPath::parse("root.a.x").unwrap(), None, |_| {}).unwrap();
+    ds.quiesce();
+    drop(w);
+    ds.quiesce();
+    drop(ds);
+    freed.recv_timeout(EVENTUALLY).expect("the server was never freed");
+}
