@@ -83,6 +83,25 @@ impl Clock for SystemClock {
     }
 }
 
+/// `at + d`, or the latest time of day a `SystemTime` holds where that does not fit.
+fn saturating_wall(at: SystemTime, d: Duration) -> SystemTime {
+    at.checked_add(d).unwrap_or_else(|| {
+        static LATEST: OnceLock<SystemTime> = OnceLock::new();
+        *LATEST.get_or_init(|| {
+            // The platform's limit, found by halving steps up from the epoch.
+            let mut t = UNIX_EPOCH;
+            let mut step = Duration::MAX;
+            while step > Duration::ZERO {
+                match t.checked_add(step) {
+                    Some(next) => t = next,
+                    None => step /= 2,
+                }
+            }
+            t
+        })
+    })
+}
+
 /// How long the system clock's [`Clock::wall_at`] trusts the offset it read (ns).
 const OFFSET_FOR: i64 = 100_000_000;
 /// The instant monotonic times count from.
@@ -174,12 +193,13 @@ impl Clock for ManualClock {
     }
 
     fn wall(&self) -> SystemTime {
-        let since = *self.inner.now.lock() - self.inner.start;
-        *self.inner.wall0.lock() + since
+        self.wall_at(self.now())
     }
 
+    /// Saturates where the clock has moved further than a `SystemTime` goes (it never
+    /// panics, whatever `advance` was given).
     fn wall_at(&self, now: Instant) -> SystemTime {
-        *self.inner.wall0.lock() + now.saturating_duration_since(self.inner.start)
+        saturating_wall(*self.inner.wall0.lock(), now.saturating_duration_since(self.inner.start))
     }
 
     fn on_advance(&self, fire: Weak<dyn Fn() + Send + Sync>) -> bool {

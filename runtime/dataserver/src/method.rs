@@ -269,7 +269,10 @@ impl DataServer {
 
     pub fn unpublish_method(&self, guid: Guid, name: impl Into<PropName>) -> Result<(), DsError> {
         let o = self.object(guid)?;
-        o.state.write().methods.remove(&name.into());
+        let removed = o.state.write().methods.remove(&name.into());
+        // The handler is the module's: it is dropped once the object's lock is released,
+        // so its `Drop` may use the DataServer (docs/dataserver.md "Dropping module state").
+        drop(removed);
         Ok(())
     }
 

@@ -90,6 +90,9 @@ struct State {
     object_only: bool,
     /// Events found while the watch was set up, emitted by its first executor job.
     initial: Vec<PathEvent>,
+    /// The thread running the callback now (it holds `callback`'s lock meanwhile): a drop
+    /// from elsewhere waits for it, a drop from inside the callback does not.
+    running_on: Option<std::thread::ThreadId>,
 }
 
 impl DataServer {
@@ -152,6 +155,7 @@ impl DataServer {
             callback: Arc::new(Mutex::new(callback)),
             object_only,
             initial: Vec::new(),
+            running_on: None,
         }));
         let mut st = state.lock();
         // The first events go out on the executor, before anything the subscriptions made
@@ -186,10 +190,11 @@ impl PathWatch {
 
 impl Drop for PathWatch {
     fn drop(&mut self) {
-        let subs = {
+        let (subs, callback, inside) = {
             let mut st = self.state.lock();
             st.closed = true;
-            std::mem::take(&mut st.subs)
+            let inside = st.running_on == Some(std::thread::current().id());
+            (std::mem::take(&mut st.subs), st.callback.clone(), inside)
         };
         for (id, _) in subs {
             if self.nowait {
@@ -197,6 +202,12 @@ impl Drop for PathWatch {
             } else {
                 self.ds.unsubscribe(id);
             }
+        }
+        if !self.nowait && !inside {
+            // A callback may run outside every subscription (the first events go out in a
+            // plain executor job): wait for it too. It holds the lock while it runs, and
+            // sees `closed` before it would start another.
+            drop(callback.lock());
         }
     }
 }
@@ -222,9 +233,13 @@ fn rebuild(ds: &DataServer, me: &Arc<Mutex<State>>, st: &mut State, k: usize) ->
             (false, _) => Topic::Children { object: at },
         };
         let weak = Arc::downgrade(me);
-        let ds2 = ds.clone();
+        // The server only weakly: the subscription lives in the server's registry (and,
+        // once ended, in its deferred reclamation), so a strong handle here would keep the
+        // server, and its threads, alive for ever.
+        let server = Arc::downgrade(&ds.inner);
         let sub = ds.subscribe_on(&st.executor.clone(), topic, move |n| {
-            if let Some(me) = weak.upgrade() {
+            if let (Some(me), Some(inner)) = (weak.upgrade(), server.upgrade()) {
+                let ds2 = DataServer { inner };
                 let events = {
                     let mut st = me.lock();
                     on_notification(&ds2, &me, &mut st, j, generation, n)
@@ -338,8 +353,8 @@ fn drop_reported(st: &mut State) -> Vec<PathEvent> {
     }
 }
 
-/// Runs the callback for each event; one that panics is caught and counted, and the
-/// events after it are still delivered.
+/// Runs the callback for each event until the watch is closed; one that panics is caught
+/// and counted, and the events after it are still delivered.
 fn emit(ds: &DataServer, me: &Arc<Mutex<State>>, events: Vec<PathEvent>) {
     if events.is_empty() {
         return;
@@ -352,11 +367,18 @@ fn emit(ds: &DataServer, me: &Arc<Mutex<State>>, events: Vec<PathEvent>) {
         st.callback.clone()
     };
     let mut cb = cb.lock();
+    me.lock().running_on = Some(std::thread::current().id());
     for e in &events {
+        // Checked before each event: a cancel during the batch (from its own callback
+        // included) stops the rest.
+        if me.lock().closed {
+            break;
+        }
         if catch_unwind(AssertUnwindSafe(|| cb(e))).is_err() {
             ds.stats().panics_caught.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         }
     }
+    me.lock().running_on = None;
 }
 
 impl DataServer {

@@ -182,16 +182,34 @@ impl DataServer {
 
 /// Whether writing `new` over `old` is no change: equal by the values' total order, where
 /// additionally any NaN equals any other NaN (whatever its payload or sign), also inside
-/// lists and sets.
+/// lists and sets. In a set every NaN is the same element: sets are compared with their
+/// NaNs made one (which moves them where the total order sorts it, and merges them).
 pub(crate) fn unchanged(old: &Value, new: &Value) -> bool {
     match (old, new) {
         (Value::Float(a), Value::Float(b)) => {
             (a.is_nan() && b.is_nan()) || a.to_bits() == b.to_bits()
         }
-        (Value::List(a), Value::List(b)) | (Value::Set(a), Value::Set(b)) => {
+        (Value::List(a), Value::List(b)) => {
+            a.len() == b.len() && a.iter().zip(b.iter()).all(|(x, y)| unchanged(x, y))
+        }
+        (Value::Set(_), Value::Set(_)) => {
+            let (Value::Set(a), Value::Set(b)) = (one_nan(old), one_nan(new)) else {
+                unreachable!("one_nan keeps a set a set")
+            };
             a.len() == b.len() && a.iter().zip(b.iter()).all(|(x, y)| unchanged(x, y))
         }
         _ => old == new,
+    }
+}
+
+/// `v` with every NaN in it (nested ones included) made the same NaN, sets re-sorted and
+/// merged accordingly.
+fn one_nan(v: &Value) -> Value {
+    match v {
+        Value::Float(x) if x.is_nan() => Value::Float(f64::NAN),
+        Value::List(l) => Value::list(l.iter().map(one_nan)),
+        Value::Set(s) => Value::set(s.iter().map(one_nan)),
+        _ => v.clone(),
     }
 }
 

@@ -206,8 +206,10 @@ impl DataServer {
                 notify_child(&ps, Kind::Deleted, guid, &info, index);
             }
         }
-        self.emit(|| Change::Deleted { object: guid });
-        self.kill_subtree(guid);
+        let removed = self.kill_subtree(guid);
+        drop(_shape);
+        // The subtree's handlers are the modules': dropped once no lock is held.
+        drop(removed);
         Ok(())
     }
 
@@ -244,8 +246,10 @@ impl DataServer {
             notify_child(&ps, Kind::New, keep, &keep_info, index);
         }
         drop(ps);
-        self.emit(|| Change::Deleted { object: guid });
-        self.kill_subtree(guid);
+        let removed = self.kill_subtree(guid);
+        drop(_shape);
+        // The subtree's handlers are the modules': dropped once no lock is held.
+        drop(removed);
         Ok(())
     }
 
@@ -277,11 +281,19 @@ impl DataServer {
     }
 
     /// Marks every object of the subtree dead, tells each one's subscribers (parents
-    /// first), and removes them from the table. Caller holds the structure lock and has
-    /// already unlinked `guid` from its parent.
-    fn kill_subtree(&self, guid: Guid) {
+    /// first), feeds `Deleted` for `guid` and removes them from the table. Caller holds the
+    /// structure lock and has already unlinked `guid` from its parent; it drops what this
+    /// returns (the subtree's method handlers, which are the modules') after releasing it.
+    ///
+    /// `Deleted` is fed only once every object of the subtree is dead: a write checks
+    /// `alive` and feeds itself under its object's lock, so no write to the subtree can be
+    /// fed after the deletion that removed it.
+    #[must_use = "the removed handlers must be dropped after the structure lock is released"]
+    fn kill_subtree(&self, guid: Guid) -> Vec<Arc<crate::method::Method>> {
+        let mut removed = Vec::new();
         let mut stack = vec![guid];
         let mut orphans = Vec::new();
+        let mut dead = Vec::new();
         let objects = self.inner.objects.pin();
         while let Some(g) = stack.pop() {
             let Some(o) = objects.get(&g).cloned() else { continue };
@@ -295,8 +307,12 @@ impl DataServer {
             for s in os.prop_subs.drain(..).chain(os.child_subs.drain(..)) {
                 s.enqueue(gone.clone());
             }
-            os.methods.clear();
+            removed.extend(std::mem::take(&mut os.methods).into_values());
             drop(guard);
+            dead.push(g);
+        }
+        self.emit(|| Change::Deleted { object: guid });
+        for g in dead {
             objects.remove(&g);
             orphans.extend(self.inner.streams.forget(g));
         }
@@ -309,6 +325,7 @@ impl DataServer {
                 }
             }));
         }
+        removed
     }
 
     fn new_guid(&self) -> Guid {
@@ -487,11 +504,18 @@ impl DataServer {
     /// Waits until no notification or queued call is pending or running (delayed calls
     /// that are not yet due do not count). For tests and orderly shutdown.
     pub fn quiesce(&self) {
-        // A due job the timer thread has taken but not yet submitted is in neither count:
-        // wait until the pool is idle with no job in the timer's hands.
+        // A due job still on the schedule (the timer thread not yet woken) or taken but not
+        // yet submitted is in neither count: fire what is due here (unless
+        // `advance_settled` holds the timer, and fires it itself), and wait until the pool
+        // is idle with no job due or in the timer's hands.
+        let timer = &self.inner.timer;
         loop {
+            timer.fire_due();
             crate::executor::wait_quiet(&self.inner.pool);
-            if self.inner.timer.firing() == 0 && crate::executor::is_quiet(&self.inner.pool) {
+            if timer.firing() == 0
+                && !timer.has_due()
+                && crate::executor::is_quiet(&self.inner.pool)
+            {
                 return;
             }
             std::thread::yield_now();

@@ -140,6 +140,22 @@ impl Timer {
         self.shared.state.lock().jobs.keys().next().map(|k| k.0)
     }
 
+    /// Fires every job that is due, on this thread, unless the timer is held.
+    pub(crate) fn fire_due(&self) {
+        self.shared.fire_due();
+    }
+
+    /// Whether a job is due and not held back (`DataServer::advance_settled` holds the
+    /// timer and fires due jobs itself).
+    pub(crate) fn has_due(&self) -> bool {
+        if self.shared.held.load(Ordering::SeqCst) {
+            return false;
+        }
+        let now = self.shared.clock.now();
+        let st = self.shared.state.lock();
+        !st.stop && st.jobs.keys().next().is_some_and(|k| k.0 <= now)
+    }
+
     /// Fires the earliest job if it is due; returns whether one fired.
     pub(crate) fn fire_one(&self) -> bool {
         self.shared.fire_one()

@@ -162,3 +162,45 @@ fn advance_settled_fires_each_job_at_its_deadline_after_the_work_of_the_one_befo
     assert_eq!(ds.now(), t0 + ms(50));
     assert_eq!(ds.next_deadline(), Some(t0 + ms(90)));
 }
+
+#[test]
+fn quiesce_waits_for_a_timer_job_that_is_already_due() {
+    let (manual_ds, _clock) = manual();
+    for ds in [DataServer::default(), manual_ds] {
+        let fired = Arc::new(AtomicUsize::new(0));
+        for i in 1..=300 {
+            let f = fired.clone();
+            ds.run_after(Duration::ZERO, None, move || {
+                f.fetch_add(1, Ordering::SeqCst);
+            });
+            ds.quiesce();
+            assert_eq!(fired.load(Ordering::SeqCst), i, "try {i}: quiesce returned first");
+        }
+    }
+}
+
+#[test]
+fn a_manual_clock_moved_as_far_as_an_instant_goes_still_tells_the_time_of_day() {
+    let (ds, clock) = manual();
+    let feed = ds.change_feed();
+    let o = ds.create_object(ds.root(), ObjectInfo::new("o", "thing")).unwrap();
+    let before = ds.wall_time();
+    // As far as an `Instant` goes (each `advance` alone stops at a hundred years).
+    let mut step = Duration::MAX;
+    while step > Duration::ZERO {
+        match ds.now().checked_add(step) {
+            Some(_) => clock.advance(step),
+            None => step /= 2,
+        }
+    }
+    assert!(ds.now().checked_add(Duration::from_nanos(1)).is_none());
+    let after = ds.wall_time();
+    assert!(after >= before, "the time of day went back");
+    assert!(ds.wall_secs() > 0.0);
+    ds.set(o, "x", Value::Int(1)).unwrap();
+    let got: Vec<Stamped> = feed.try_iter().collect();
+    let last = got.last().expect("the write is fed");
+    assert!(matches!(last.change, Change::PropertySet { object, .. } if object == o));
+    // The feed stamps in nanoseconds since the epoch (u64): it saturates there, sooner.
+    assert!(got[0].wall <= last.wall && last.wall <= after, "the feed's stamps went back");
+}

@@ -199,3 +199,54 @@ fn a_dropped_feed_is_forgotten_and_a_later_one_sees_only_what_follows() {
     assert_eq!(got.len(), 1);
     assert!(matches!(&got[0].change, Change::PropertySet { value: Value::Int(2), .. }));
 }
+
+#[test]
+fn no_write_to_an_object_is_fed_after_the_deletion_of_its_ancestor() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let ds = DataServer::default();
+    let parent = object(&ds, "parent");
+    let children: Arc<Vec<Guid>> = Arc::new(
+        (0..3000)
+            .map(|i| ds.create_object(parent, ObjectInfo::new(&format!("c{i}"), "thing")).unwrap())
+            .collect(),
+    );
+    let feed = ds.change_feed();
+    let done = Arc::new(AtomicBool::new(false));
+    let (started_tx, started) = crossbeam_channel::unbounded();
+    let writers: Vec<_> = (0..2)
+        .map(|w| {
+            let (ds, children, done, started) =
+                (ds.clone(), children.clone(), done.clone(), started_tx.clone());
+            std::thread::spawn(move || {
+                let mut n = 0i64;
+                while !done.load(Ordering::SeqCst) {
+                    // From the last child back: the ones a delete reaches last.
+                    for &c in children.iter().rev().skip(w).step_by(2) {
+                        let _ = ds.set(c, "x", Value::Int(n));
+                        n += 1;
+                    }
+                    let _ = started.send(());
+                }
+            })
+        })
+        .collect();
+    for _ in 0..2 {
+        started.recv_timeout(Duration::from_secs(20)).expect("the writers run");
+    }
+    ds.delete_object(parent).unwrap();
+    done.store(true, Ordering::SeqCst);
+    for w in writers {
+        w.join().unwrap();
+    }
+    let got = drain(&feed);
+    let deleted = got
+        .iter()
+        .position(|s| matches!(s.change, Change::Deleted { object } if object == parent))
+        .expect("the deletion is fed");
+    let late = got[deleted..]
+        .iter()
+        .filter(|s| matches!(&s.change, Change::PropertySet { object, .. } if children.contains(object)))
+        .count();
+    assert_eq!(late, 0, "writes fed after the Deleted of their parent");
+}

@@ -64,6 +64,36 @@ fn nan_written_over_nan_is_no_change_whatever_its_payload_or_sign() {
     assert_eq!(changes.load(Ordering::SeqCst), 1, "a number over NaN is a change");
 }
 
+#[test]
+fn a_set_is_unchanged_by_nans_that_differ_only_in_payload_or_sign() {
+    let ds = DataServer::default();
+    let o = object(&ds, "o");
+    let f = |x: f64| Value::Float(x);
+    let one_nan = f64::from_bits(0x7ff8_0000_0000_0001);
+    ds.set(o, "s", Value::set(vec![f(1.0), f(f64::NAN)])).unwrap();
+    let changes = Arc::new(AtomicUsize::new(0));
+    let c = changes.clone();
+    ds.subscribe(Topic::properties(o), move |n| {
+        if n.kind == Kind::Changed {
+            c.fetch_add(1, Ordering::SeqCst);
+        }
+    })
+    .unwrap();
+    // Any NaN is the same element of a set, wherever its sign sorts it and however many.
+    for same in [
+        vec![f(-f64::NAN), f(1.0)],
+        vec![f(1.0), f(one_nan)],
+        vec![f(f64::NAN), f(-f64::NAN), f(1.0)],
+    ] {
+        ds.set(o, "s", Value::set(same)).unwrap();
+    }
+    ds.quiesce();
+    assert_eq!(changes.load(Ordering::SeqCst), 0);
+    ds.set(o, "s", Value::set(vec![f(1.0)])).unwrap();
+    ds.quiesce();
+    assert_eq!(changes.load(Ordering::SeqCst), 1, "dropping the NaN is a change");
+}
+
 /// A receiver whose method waits for a gate before each message.
 fn gated_receiver(ds: &DataServer, name: &str) -> (Guid, crossbeam_channel::Sender<()>) {
     let o = object(ds, name);
