@@ -170,6 +170,9 @@ impl TextEngine {
             return None;
         }
         let (width, height) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        if !crate::alloc::fits(width as u64, height as u64) {
+            return None;
+        }
         let mut data = vec![0u8; width * height];
         for g in glyphs {
             let Some(img) = self.glyph(g.key) else { continue };

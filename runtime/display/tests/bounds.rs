@@ -92,7 +92,7 @@ fn a_screen_size_beyond_the_limit_is_held_to_it() {
     ds.set(d.display_object(), "width", Value::Float(1e12)).unwrap();
     ds.set(d.display_object(), "height", Value::Float(4.0)).unwrap();
     frame(&ds, &mut d);
-    let side = mocu_value::limits::MAX_EXTENT as u32;
+    let side = mocu_value::limits::MAX_SCREEN_SIDE;
     assert_eq!(d.window_manager().size(), (side, 4));
     assert_eq!(d.window_manager().layer_size(w), Some((side, 4)));
 }

@@ -17,7 +17,7 @@ use mocu_dataserver::{
     CallOptions, CallOutcome, DataServer, DsError, Executor, Guid, Kind, MethodSpec, Notification,
     ParamSpec, Subject, SubscriptionId, Topic, Value, ValueKind,
 };
-use mocu_value::limits::MAX_EXTENT;
+use mocu_value::limits::MAX_SCREEN_SIDE;
 use parking_lot::{Condvar, Mutex};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -472,7 +472,7 @@ impl WindowManager {
                         Some(t) => SkiaCanvas::reusing_drawn(pm, t, origin, wsize),
                         None => SkiaCanvas::reusing(pm, origin, wsize),
                     },
-                    _ => match Pixmap::new(pw, ph) {
+                    _ => match crate::alloc::pixmap(pw, ph) {
                         Some(pm) => SkiaCanvas::blank(pm, origin, wsize),
                         None => return,
                     },
@@ -491,7 +491,7 @@ impl WindowManager {
                     layer.damage = IRect::default();
                     return;
                 }
-                let Some(scratch) = Pixmap::new(d.w as u32, d.h as u32) else { return };
+                let Some(scratch) = crate::alloc::pixmap(d.w as u32, d.h as u32) else { return };
                 scratch_at = d;
                 SkiaCanvas::blank(scratch, (d.x, d.y), wsize)
             }
@@ -581,9 +581,9 @@ impl Drop for WindowManager {
 }
 
 /// A screen side as published on `root.display`, within what the display allocates (at
-/// least 1 px, at most [`MAX_EXTENT`]).
+/// least 1 px, at most [`MAX_SCREEN_SIDE`]).
 fn screen_side(v: f64) -> u32 {
-    if v.is_nan() { 1 } else { v.round().clamp(1.0, MAX_EXTENT) as u32 }
+    if v.is_nan() { 1 } else { v.round().clamp(1.0, MAX_SCREEN_SIDE as f64) as u32 }
 }
 
 /// The window-local rectangle a window's layer holds: a clipped window only the part of it
