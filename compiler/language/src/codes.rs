@@ -73,7 +73,7 @@ pub const ALL: &[(&str, &str)] = &[
     (UNKNOWN_ANCHOR, "unknown anchor name"),
     (BAD_DESIGN, "`design` outside the layout file, twice, or not a positive px size"),
     (BAD_FLOW, "`flow` with an unknown direction, a gap not in px, or nothing to place"),
-    (BEYOND_LIMIT, "window `rect`, widget `at` or `design` size beyond what the display allocates"),
+    (BEYOND_LIMIT, "`rect`, `at`, `design` or text `size` beyond what the display allocates"),
     (NOT_A_NUMBER, "a non-number used as a number"),
     (TYPE_MISMATCH, "type mismatch"),
     (ARG_COUNT, "wrong number of arguments"),

@@ -14,6 +14,10 @@ pub const MAX_SCREEN_SIDE: u32 = 8192;
 /// the largest size: 256 MiB of RGBA). A bigger one is refused, never allocated.
 pub const MAX_PIXMAP_PX: u64 = MAX_SCREEN_SIDE as u64 * MAX_SCREEN_SIDE as u64;
 
+/// The largest text size, in px, the display shapes and rasterises (a glyph is a per-pixel
+/// buffer of about its size squared); a text `size` beyond it is refused by `mocu check`.
+pub const MAX_FONT_PX: f64 = 1000.0;
+
 /// The smallest side of a `design W x H`: below it the design's scale (screen / design) would
 /// grow every px beyond what a screen can show.
 pub const MIN_DESIGN_SIDE: f64 = 64.0;
