@@ -24,6 +24,7 @@ pub const UNKNOWN_MODE: &str = "E0212";
 pub const UNKNOWN_ANCHOR: &str = "E0213";
 pub const BAD_DESIGN: &str = "E0214";
 pub const BAD_FLOW: &str = "E0215";
+pub const BEYOND_LIMIT: &str = "E0216";
 
 pub const NOT_A_NUMBER: &str = "E0301";
 pub const TYPE_MISMATCH: &str = "E0302";
@@ -72,6 +73,7 @@ pub const ALL: &[(&str, &str)] = &[
     (UNKNOWN_ANCHOR, "unknown anchor name"),
     (BAD_DESIGN, "`design` outside the layout file, twice, or not a positive px size"),
     (BAD_FLOW, "`flow` with an unknown direction, a gap not in px, or nothing to place"),
+    (BEYOND_LIMIT, "`rect`, `at`, `design` or text `size` beyond what the display allocates"),
     (NOT_A_NUMBER, "a non-number used as a number"),
     (TYPE_MISMATCH, "type mismatch"),
     (ARG_COUNT, "wrong number of arguments"),

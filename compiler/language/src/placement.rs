@@ -20,6 +20,7 @@
 //! anchored to opposite edges: edges stay attached, and nothing leaves the screen that was
 //! on the design.
 
+use mocu_value::limits::MAX_DESIGN_SCALE;
 use serde::{Deserialize, Serialize};
 
 /// Where, along one axis, a position is measured from.
@@ -83,10 +84,12 @@ pub struct Design {
 }
 
 impl Design {
-    /// The uniform scale from design px to screen px: the whole design fits the screen.
+    /// The uniform scale from design px to screen px: the whole design fits the screen. At
+    /// most [`MAX_DESIGN_SCALE`] (the largest screen over the smallest design `mocu check`
+    /// allows, E0216): a tiny design never grows every px beyond any screen.
     pub fn scale(&self, screen: (f64, f64)) -> f64 {
         let s = (screen.0 / self.width).min(screen.1 / self.height);
-        if s.is_finite() && s > 0.0 { s } else { 1.0 }
+        if s.is_finite() && s > 0.0 { s.min(MAX_DESIGN_SCALE) } else { 1.0 }
     }
 }
 
@@ -108,6 +111,7 @@ pub fn place(edge: Edge, parent: f64, offset: f64, size: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mocu_value::limits::MIN_DESIGN_SIDE;
 
     #[test]
     fn every_anchor_name_round_trips_and_others_are_refused() {
@@ -127,6 +131,15 @@ mod tests {
         assert_eq!(d.scale((3840.0, 2160.0)), 3.0);
         assert_eq!(d.scale((800.0, 480.0)), 0.625); // 800 / 1280 < 480 / 720
         assert_eq!(scale(None, (800.0, 480.0)), 1.0);
+    }
+
+    #[test]
+    fn a_tiny_design_scales_no_more_than_the_limit() {
+        let tiny = Design { width: 0.001, height: 0.001 };
+        assert_eq!(tiny.scale((1280.0, 720.0)), MAX_DESIGN_SCALE);
+        let smallest = Design { width: MIN_DESIGN_SIDE, height: MIN_DESIGN_SIDE };
+        let largest = mocu_value::limits::MAX_SCREEN_SIDE as f64;
+        assert_eq!(smallest.scale((largest, largest)), MAX_DESIGN_SCALE, "a checked design");
     }
 
     #[test]

@@ -41,7 +41,7 @@ pub struct CpuCompositor {
 impl CpuCompositor {
     pub fn new(width: u32, height: u32, background: Color) -> Option<CpuCompositor> {
         Some(CpuCompositor {
-            frame: Pixmap::new(width, height)?,
+            frame: crate::alloc::pixmap(width, height)?,
             background: premultiply(background),
         })
     }
@@ -51,7 +51,7 @@ impl CpuCompositor {
     }
 
     pub fn resize(&mut self, width: u32, height: u32) {
-        if let Some(p) = Pixmap::new(width, height) {
+        if let Some(p) = crate::alloc::pixmap(width, height) {
             self.frame = p;
         }
     }

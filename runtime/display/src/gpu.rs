@@ -523,6 +523,10 @@ impl Compositor for GpuCompositor {
 
     fn read_frame(&mut self) -> Pixmap {
         let (w, h) = self.size;
+        // A frame beyond what the display allocates reads back as one blank pixel.
+        let Some(mut out) = crate::alloc::pixmap(w, h) else {
+            return crate::alloc::pixmap(1, 1).expect("a 1 px pixmap");
+        };
         let stride = (w * 4).div_ceil(256) * 256;
         let buf = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
@@ -553,7 +557,6 @@ impl Compositor for GpuCompositor {
         self.queue.submit([enc.finish()]);
         let slice = buf.slice(..);
         slice.map_async(wgpu::MapMode::Read, |_| {});
-        let mut out = Pixmap::new(w, h).expect("the frame size is valid");
         if self.device.poll(wgpu::PollType::wait_indefinitely()).is_err() {
             return out;
         }

@@ -55,7 +55,7 @@ impl Image {
             return Some(self.clone());
         }
         let (w, h) = (width as f32, height as f32);
-        let pixmap = tiny_skia::Pixmap::new(width, height)?;
+        let pixmap = crate::alloc::pixmap(width, height)?;
         let mut c = crate::SkiaCanvas::new(pixmap, (0, 0), crate::Size::new(w, h));
         crate::Canvas::draw_image(
             &mut c,

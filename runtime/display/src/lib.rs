@@ -12,6 +12,7 @@
 
 #![forbid(unsafe_code)]
 
+mod alloc;
 mod anim;
 mod behaviours;
 mod canvas;

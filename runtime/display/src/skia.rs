@@ -685,7 +685,7 @@ impl Canvas for SkiaCanvas {
             // Rotated or skewed: rasterise the run upright, then draw it transformed.
             let (pw, ph) =
                 ((m.width.ceil() as u32).max(1) + 2, (m.height.ceil() as u32).max(1) + 2);
-            let Some(tmp) = Pixmap::new(pw, ph) else { return metrics };
+            let Some(tmp) = crate::alloc::pixmap(pw, ph) else { return metrics };
             let mut sub = SkiaCanvas::new(tmp, (0, 0), Size::new(pw as f32, ph as f32));
             sub.blit_text(&run, 1, 1, style.color);
             let tmp = sub.into_pixmap();

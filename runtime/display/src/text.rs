@@ -13,6 +13,7 @@ use cosmic_text::{
     Attrs, Buffer, CacheKey, Family, FontSystem, Metrics, Shaping, SwashCache, SwashContent,
     Weight, fontdb,
 };
+use mocu_value::limits::MAX_FONT_PX;
 use parking_lot::Mutex;
 use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
@@ -104,7 +105,7 @@ pub fn measure(text: &str, size: f32, bold: bool) -> TextMetrics {
 
 impl TextEngine {
     pub(crate) fn shape(&mut self, text: &str, size: f32, bold: bool) -> Arc<ShapedRun> {
-        let size = if size.is_finite() { size.clamp(1.0, 1000.0) } else { 12.0 };
+        let size = if size.is_finite() { size.clamp(1.0, MAX_FONT_PX as f32) } else { 12.0 };
         let key = (size.to_bits(), bold);
         if let Some(r) = self.runs.get(&key).and_then(|m| m.get(text)) {
             return r.clone();
@@ -170,6 +171,9 @@ impl TextEngine {
             return None;
         }
         let (width, height) = ((x1 - x0) as usize, (y1 - y0) as usize);
+        if !crate::alloc::fits(width as u64, height as u64) {
+            return None;
+        }
         let mut data = vec![0u8; width * height];
         for g in glyphs {
             let Some(img) = self.glyph(g.key) else { continue };

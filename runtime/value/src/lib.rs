@@ -7,6 +7,7 @@
 
 mod guid;
 mod kind;
+pub mod limits;
 mod name;
 mod value;
 

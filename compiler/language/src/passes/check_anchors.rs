@@ -1,6 +1,7 @@
 //! Screen placement (see [`crate::placement`]): `anchor` names (E0213), the `design` size
 //! (E0214: in the layout file, once, positive px), a `for each`'s `flow` (E0215: `down` or
-//! `right`, a gap in px, windows to place) and, in a layout with a design, positions
+//! `right`, a gap in px, windows to place), the display's limits (E0216: `rect`, `at` and
+//! `design` numbers within mocu-value's `limits`, which the runtime enforces too) and, in a layout with a design, positions
 //! computed from the screen's own size (W0005), which would be scaled twice.
 
 use crate::ast::{self, ExprKind, Item, LitUnit};
@@ -9,6 +10,7 @@ use crate::diagnostics::Diagnostics;
 use crate::passes::Modules;
 use crate::placement::{ANCHORS, Anchor, Design};
 use crate::program::{Bound, PathBase, Program};
+use mocu_value::limits::{MAX_EXTENT, MIN_DESIGN_SIDE};
 
 /// Checks every anchor and design of the layout and the files it uses; returns the design.
 pub fn check_anchors(modules: &Modules, diags: &mut Diagnostics) -> Option<Design> {
@@ -46,7 +48,19 @@ pub fn check_anchors(modules: &Modules, diags: &mut Diagnostics) -> Option<Desig
 fn size(e: &ast::Expr, diags: &mut Diagnostics) -> Option<f64> {
     let ExprKind::Number { value, unit } = &e.kind else { return None };
     match unit {
-        None | Some(LitUnit::Px) if *value > 0.0 => Some(*value),
+        None | Some(LitUnit::Px) if (MIN_DESIGN_SIDE..=MAX_EXTENT).contains(value) => Some(*value),
+        None | Some(LitUnit::Px) if *value > 0.0 => {
+            diags
+                .error(
+                    codes::BEYOND_LIMIT,
+                    e.span,
+                    format!(
+                        "a design side is {MIN_DESIGN_SIDE} to {MAX_EXTENT} px, not {value}"
+                    ),
+                )
+                .help("the design's scale (screen / design) grows every px: write the screen size the layout was drawn for, `design 1280 x 720`");
+            None
+        }
         None | Some(LitUnit::Px) => {
             diags
                 .error(codes::BAD_DESIGN, e.span, "a design size is more than 0 px")
@@ -62,13 +76,20 @@ fn size(e: &ast::Expr, diags: &mut Diagnostics) -> Option<f64> {
     }
 }
 
-/// E0213 and E0215 in one item: its anchors and its `flow`.
+/// E0213, E0215 and E0216 in one item: its anchors, its `flow` and its `rect`/`at`.
 pub fn anchors(item: &Item, diags: &mut Diagnostics) {
     match item {
-        Item::Window(w) => anchor(w.anchor.as_ref(), diags),
-        Item::In(b) => b.widgets.iter().for_each(|w| anchor(w.anchor.as_ref(), diags)),
+        Item::Window(w) => {
+            anchor(w.anchor.as_ref(), diags);
+            within_limits(w.rect.as_deref().unwrap_or_default(), "a window's `rect`", diags);
+        }
+        Item::In(b) => b.widgets.iter().for_each(|w| {
+            anchor(w.anchor.as_ref(), diags);
+            within_limits(w.at.as_ref().map_or(&[][..], |a| &a.0), "a widget's `at`", diags);
+        }),
         Item::Each(e) => {
             if let Some(f) = &e.flow {
+                within_limits(&f.rect, "a flow's `rect`", diags);
                 anchor(f.anchor.as_ref(), diags);
                 flow(f, e, diags);
             }
@@ -102,6 +123,30 @@ fn flow(f: &ast::Flow, e: &ast::Each, diags: &mut Diagnostics) {
         diags
             .error(codes::BAD_FLOW, f.span, "`flow` places the template's windows, and it has none")
             .help("declare a `window` in the `for each` body, or leave `flow` out");
+    }
+}
+
+/// E0216: a px number of a `rect` or an `at` beyond ±[`MAX_EXTENT`]: the display would hold
+/// the window to its limits (and a window larger than the screen shows only its part on it).
+fn within_limits(numbers: &[ast::Expr], what: &str, diags: &mut Diagnostics) {
+    for e in numbers {
+        let v = match &e.kind {
+            ExprKind::Number { value, unit: None | Some(LitUnit::Px) } => *value,
+            ExprKind::Unary(ast::UnOp::Neg, inner) => match &inner.kind {
+                ExprKind::Number { value, unit: None | Some(LitUnit::Px) } => -*value,
+                _ => continue,
+            },
+            _ => continue,
+        };
+        if v.abs() > MAX_EXTENT {
+            diags
+                .error(
+                    codes::BEYOND_LIMIT,
+                    e.span,
+                    format!("{v} px is beyond the display's limit of ±{MAX_EXTENT} px"),
+                )
+                .help(format!("{what} stays within ±{MAX_EXTENT} px (design px with `design`); `100%` is the whole screen"));
+        }
     }
 }
 

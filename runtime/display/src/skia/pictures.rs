@@ -16,7 +16,6 @@ use crate::tiles::Tiles;
 use parking_lot::Mutex;
 use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
-use tiny_skia::Pixmap;
 
 /// Pictures kept (bytes, all together) before the cache is emptied.
 const CACHE_BYTES: usize = 32 << 20;
@@ -94,7 +93,7 @@ impl SkiaCanvas {
     /// cached.
     pub(super) fn begin_recording(&mut self, key: u64, bounds: Rect) -> bool {
         let Some((at, k)) = self.picture_place(key, bounds) else { return false };
-        let Some(pm) = Pixmap::new(at.w as u32, at.h as u32) else { return false };
+        let Some(pm) = crate::alloc::pixmap(at.w as u32, at.h as u32) else { return false };
         let origin = (self.origin.0 + at.x, self.origin.1 + at.y);
         let mut sprite = SkiaCanvas::blank(pm, origin, self.size);
         sprite.state.transform = self.state.transform;

@@ -17,6 +17,7 @@ use mocu_dataserver::{
     CallOptions, CallOutcome, DataServer, DsError, Executor, Guid, Kind, MethodSpec, Notification,
     ParamSpec, Subject, SubscriptionId, Topic, Value, ValueKind,
 };
+use mocu_value::limits::MAX_SCREEN_SIDE;
 use parking_lot::{Condvar, Mutex};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -81,6 +82,8 @@ struct Layer {
     origin: (i32, i32),
     painted_size: (i32, i32),
     painted_clip: bool,
+    /// The window-local part of the window the pixmap holds (see [`layer_extent`]).
+    painted_extent: IRect,
     /// Needs a full repaint before it can be shown.
     stale: bool,
     /// Window-local damage not yet repainted.
@@ -107,6 +110,7 @@ impl Layer {
             origin: (0, 0),
             painted_size: (0, 0),
             painted_clip: true,
+            painted_extent: IRect::default(),
             stale: true,
             damage: IRect::default(),
             failed: None,
@@ -286,8 +290,8 @@ impl WindowManager {
                 .collect();
             let removed = std::mem::take(&mut st.removed);
             let resized = if std::mem::take(&mut st.size_changed) {
-                let w = st.size.0.unwrap_or(self.size.0 as f64).round().max(1.0) as u32;
-                let h = st.size.1.unwrap_or(self.size.1 as f64).round().max(1.0) as u32;
+                let w = screen_side(st.size.0.unwrap_or(self.size.0 as f64));
+                let h = screen_side(st.size.1.unwrap_or(self.size.1 as f64));
                 ((w, h) != self.size).then_some((w, h))
             } else {
                 None
@@ -337,16 +341,19 @@ impl WindowManager {
         self.stacking = stacking;
         for (g, props, repaint, dmg) in snaps {
             let r = props.rect(self.size);
+            let extent = layer_extent(props.clip, r, self.size);
             let layer = self.layers.entry(g).or_insert_with(Layer::new);
             if repaint
                 || layer.painted_size != (r.w, r.h)
                 || layer.painted_clip != props.clip
                 || (!props.clip && resized.is_some())
+                || (props.clip && layer.painted_extent != extent)
             {
                 layer.stale = true;
             }
             layer.damage = layer.damage.union(&dmg);
-            let visible = props.visible && props.opacity > 0.0 && r.w > 0 && r.h > 0;
+            let visible =
+                props.visible && props.opacity > 0.0 && r.w > 0 && r.h > 0 && !extent.is_empty();
             if visible {
                 if layer.stale {
                     self.paint(g, &props, r, frame, None, &mut stats);
@@ -430,6 +437,12 @@ impl WindowManager {
         self.size
     }
 
+    /// The size of the pixmap a window's layer holds (what its rendering costs), if any.
+    pub fn layer_size(&self, window: Guid) -> Option<(u32, u32)> {
+        let pm = self.layers.get(&window)?.pixmap.as_ref()?;
+        Some((pm.width(), pm.height()))
+    }
+
     /// Calls the window's painter over the whole window (`region` None) or a damaged part.
     fn paint(
         &mut self,
@@ -446,13 +459,11 @@ impl WindowManager {
         let mut scratch_at = IRect::default();
         let canvas = match region {
             None => {
-                let (pw, ph, origin) = if props.clip {
-                    (r.w as u32, r.h as u32, (0, 0))
-                } else {
-                    (size.0, size.1, (-r.x, -r.y))
-                };
+                let extent = layer_extent(props.clip, r, size);
+                let (pw, ph, origin) = (extent.w as u32, extent.h as u32, (extent.x, extent.y));
                 let tiles = layer.tiles.take();
                 layer.origin = origin;
+                layer.painted_extent = extent;
                 match layer.pixmap.take() {
                     // Cleared by the canvas before its first drawing (only where the last
                     // frame drew), or not at all when that drawing covers the layer
@@ -461,7 +472,7 @@ impl WindowManager {
                         Some(t) => SkiaCanvas::reusing_drawn(pm, t, origin, wsize),
                         None => SkiaCanvas::reusing(pm, origin, wsize),
                     },
-                    _ => match Pixmap::new(pw, ph) {
+                    _ => match crate::alloc::pixmap(pw, ph) {
                         Some(pm) => SkiaCanvas::blank(pm, origin, wsize),
                         None => return,
                     },
@@ -480,7 +491,7 @@ impl WindowManager {
                     layer.damage = IRect::default();
                     return;
                 }
-                let Some(scratch) = Pixmap::new(d.w as u32, d.h as u32) else { return };
+                let Some(scratch) = crate::alloc::pixmap(d.w as u32, d.h as u32) else { return };
                 scratch_at = d;
                 SkiaCanvas::blank(scratch, (d.x, d.y), wsize)
             }
@@ -566,6 +577,25 @@ impl Drop for WindowManager {
         for g in windows {
             let _ = self.ds.unpublish_method(g, "invalidate");
         }
+    }
+}
+
+/// A screen side as published on `root.display`, within what the display allocates (at
+/// least 1 px, at most [`MAX_SCREEN_SIDE`]).
+fn screen_side(v: f64) -> u32 {
+    if v.is_nan() { 1 } else { v.round().clamp(1.0, MAX_SCREEN_SIDE as f64) as u32 }
+}
+
+/// The window-local rectangle a window's layer holds: a clipped window only the part of it
+/// on the screen (a window far larger than the screen costs no more than the screen), an
+/// unclipped one the whole screen.
+fn layer_extent(clip: bool, r: IRect, screen: (u32, u32)) -> IRect {
+    let screen = IRect::new(0, 0, screen.0 as i32, screen.1 as i32);
+    if clip {
+        let on_screen = r.intersect(&screen);
+        if on_screen.is_empty() { IRect::default() } else { on_screen.offset(-r.x, -r.y) }
+    } else {
+        screen.offset(-r.x, -r.y)
     }
 }
 

@@ -1,6 +1,7 @@
 //! A window's properties as the window manager reads them, and what a change of each does.
 
 use super::*;
+use mocu_value::limits::MAX_WINDOW_PX;
 
 /// A window's properties as the window manager reads them.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,11 +38,14 @@ impl WinProps {
         }
     }
 
-    /// The window's pixel rectangle on the screen.
+    /// The window's pixel rectangle on the screen, each number within
+    /// ±[`MAX_WINDOW_PX`] (what a checked layout reaches at any scale; sums stay in `i32`).
     pub fn rect(&self, display: (u32, u32)) -> IRect {
         let w = self.w.unwrap_or(display.0 as f64);
         let h = self.h.unwrap_or(display.1 as f64);
-        IRect::new(self.x.round() as i32, self.y.round() as i32, w.round() as i32, h.round() as i32)
+        let px = |v: f64, lo: f64| v.round().clamp(lo, MAX_WINDOW_PX as f64) as i32;
+        let m = -(MAX_WINDOW_PX as f64);
+        IRect::new(px(self.x, m), px(self.y, m), px(w, 0.0), px(h, 0.0))
     }
 }
 

@@ -306,6 +306,19 @@ impl<'a> Typer<'a, '_> {
             } else {
                 self.expect(&st.value, s, &want, &format_args!("`{}`", st.name.name))
             };
+            let max = mocu_value::limits::MAX_FONT_PX;
+            if st.name.name == "size"
+                && let Some(n) = v.expr.constant().and_then(|c| c.number())
+                && n > max
+            {
+                self.diags
+                    .error(
+                        codes::BEYOND_LIMIT,
+                        st.value.span,
+                        format!("a text size of {n} px is beyond the display's limit of {max} px"),
+                    )
+                    .help(format!("the display draws text of at most {max} px"));
+            }
             styles.push(Arg { name: st.name.name.clone(), value: v });
         }
         Some(Shape { kind: def.name.to_string(), args, styles, span: p.span })
