@@ -20,6 +20,8 @@
 
 #![forbid(unsafe_code)]
 
+mod bounds;
+mod chunk;
 mod file;
 mod message;
 mod player;
