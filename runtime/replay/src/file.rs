@@ -159,6 +159,7 @@ impl Recording {
                 .cloned()
                 .collect());
         }
+        let (from, to) = (from.max(self.span.0), to.min(self.span.1));
         let channels = self.channels(topics);
         let mut out = Vec::new();
         for c in self.chunks_with(&channels) {
@@ -170,6 +171,7 @@ impl Recording {
                 if let Record::Message { header, data } = rec
                     && channels.contains(&header.channel_id)
                     && (from..=to).contains(&header.log_time)
+                    && (c.message_start_time..=c.message_end_time).contains(&header.log_time)
                 {
                     out.push(self.message(&header, &data));
                 }
@@ -189,6 +191,7 @@ impl Recording {
             let hi = self.linear.partition_point(|m| m.log_time <= at);
             return Ok(self.linear[..hi].iter().rev().find(|m| &*m.topic == topic).cloned());
         }
+        let at = at.min(self.span.1);
         let channels = self.channels(&[topic]);
         let mut chunks: Vec<mcap::records::ChunkIndex> = self
             .chunks_with(&channels)
@@ -207,6 +210,8 @@ impl Recording {
                 if let Record::Message { header, data } = rec
                     && channels.contains(&header.channel_id)
                     && header.log_time <= at
+                    && header.log_time >= self.span.0
+                    && (c.message_start_time..=c.message_end_time).contains(&header.log_time)
                     && best.as_ref().is_none_or(|b| {
                         (header.log_time, header.sequence) > (b.log_time, b.sequence)
                     })
@@ -216,6 +221,25 @@ impl Recording {
             }
         }
         Ok(best)
+    }
+
+    /// The log time of the first message after `t` (a lower bound, read from the chunk
+    /// index without reading chunks); `u64::MAX` when there is none. Replay skips the gap.
+    pub fn next_after(&self, t: u64) -> u64 {
+        if t >= self.span.1 {
+            return u64::MAX;
+        }
+        let Some(s) = &self.summary else {
+            let i = self.linear.partition_point(|m| m.log_time <= t);
+            return self.linear.get(i).map_or(u64::MAX, |m| m.log_time);
+        };
+        let after = t.saturating_add(1);
+        s.chunk_indexes
+            .iter()
+            .filter(|c| c.message_end_time > t)
+            .map(|c| c.message_start_time.max(after))
+            .min()
+            .unwrap_or(u64::MAX)
     }
 
     /// The channels of `topics`.
@@ -298,14 +322,16 @@ impl Recording {
                 }
             }
         }
-        self.span = match &s.stats {
-            Some(st) => (st.message_start_time, st.message_end_time),
-            None => {
-                let lo = s.chunk_indexes.iter().map(|c| c.message_start_time).min();
-                let hi = s.chunk_indexes.iter().map(|c| c.message_end_time).max();
-                (lo.unwrap_or(0), hi.unwrap_or(0))
-            }
+        // What the chunk indexes and the statistics both say: one damaged field of either
+        // cannot stretch the trial.
+        let lo = s.chunk_indexes.iter().map(|c| c.message_start_time).min().unwrap_or(0);
+        let hi = s.chunk_indexes.iter().map(|c| c.message_end_time).max().unwrap_or(0);
+        let (lo, hi) = match &s.stats {
+            Some(st) => (lo.max(st.message_start_time), hi.min(st.message_end_time)),
+            None => (lo, hi),
         };
+        let (first, last) = crate::times::window(self.meta.start_ns, lo);
+        self.span = (lo.max(first), hi.min(last));
         Ok(())
     }
 
@@ -324,6 +350,9 @@ impl Recording {
         for rec in records {
             self.take_record(rec);
         }
+        let lo = self.linear.iter().map(|m| m.log_time).min().unwrap_or(0);
+        let (first, last) = crate::times::window(self.meta.start_ns, lo);
+        self.linear.retain(|m| (first..=last).contains(&m.log_time));
         self.linear.sort_by_key(|m| (m.log_time, m.sequence));
         self.span = match (self.linear.first(), self.linear.last()) {
             (Some(a), Some(b)) => (a.log_time, b.log_time),
@@ -351,7 +380,14 @@ impl Recording {
                 ) else {
                     return;
                 };
+                let stated = header.message_start_time..=header.message_end_time;
                 for r in crate::chunk::records(&inner) {
+                    // A message outside its chunk's stated times is damaged: dropped.
+                    if let Record::Message { header: m, .. } = &r
+                        && !stated.contains(&m.log_time)
+                    {
+                        continue;
+                    }
                     self.take_record(r);
                 }
             }
