@@ -3,12 +3,8 @@
 //! its last complete chunk, and kept in memory.
 
 use mcap::records::Record;
-use mcap::sans_io::indexed_reader::ReadOrder;
-use mcap::sans_io::{
-    IndexedReadEvent, IndexedReader, IndexedReaderOptions, SummaryReadEvent, SummaryReader,
-    SummaryReaderOptions,
-};
-use std::collections::{BTreeMap, HashMap};
+use mcap::sans_io::{SummaryReadEvent, SummaryReader, SummaryReaderOptions};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
@@ -20,12 +16,22 @@ pub enum ReplayError {
     Io(String),
     /// Not an MCAP file, or not one `mocu run --record` wrote.
     Format(String),
+    /// A record that states more than the file holds (a length, offset or size): the
+    /// file is damaged or crafted, and nothing is allocated for it.
+    Damaged {
+        record: &'static str,
+        offset: u64,
+        reason: String,
+    },
 }
 
 impl std::fmt::Display for ReplayError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ReplayError::Io(e) | ReplayError::Format(e) => f.write_str(e),
+            ReplayError::Damaged { record, offset, reason } => {
+                write!(f, "damaged recording: the {record} at byte {offset} {reason}")
+            }
         }
     }
 }
@@ -63,6 +69,8 @@ pub struct RawMessage {
 /// An open recording.
 pub struct Recording {
     file: File,
+    /// The file's length: what every length it states is bounded by.
+    size: u64,
     summary: Option<mcap::Summary>,
     /// Without a summary: every message, in (log time, sequence) order.
     linear: Vec<RawMessage>,
@@ -77,9 +85,15 @@ impl Recording {
         let io = |e: std::io::Error| ReplayError::Io(format!("{}: {e}", path.display()));
         let mut file = File::open(path).map_err(io)?;
         let size = file.metadata().map_err(io)?.len();
-        let summary = read_summary(&mut file, size).ok().flatten();
+        // A summary that states more than the file holds is not used: the file is read
+        // linearly instead, as one a killed recorder left.
+        let summary = read_summary(&mut file, size)
+            .ok()
+            .flatten()
+            .filter(|s| crate::bounds::summary(s, size).is_ok());
         let mut r = Recording {
             file,
+            size,
             summary,
             linear: Vec::new(),
             topics: HashMap::new(),
@@ -145,11 +159,24 @@ impl Recording {
                 .cloned()
                 .collect());
         }
-        let opts = IndexedReaderOptions::new()
-            .include_topics(topics.iter().map(|t| t.to_string()))
-            .starting_at(from)
-            .ending_at(to);
-        let mut out = self.read_indexed(opts, usize::MAX)?;
+        let (from, to) = (from.max(self.span.0), to.min(self.span.1));
+        let channels = self.channels(topics);
+        let mut out = Vec::new();
+        for c in self.chunks_with(&channels) {
+            if c.message_start_time > to || c.message_end_time < from {
+                continue;
+            }
+            let data = self.chunk_data(&c)?;
+            for rec in crate::chunk::records(&data) {
+                if let Record::Message { header, data } = rec
+                    && channels.contains(&header.channel_id)
+                    && (from..=to).contains(&header.log_time)
+                    && (c.message_start_time..=c.message_end_time).contains(&header.log_time)
+                {
+                    out.push(self.message(&header, &data));
+                }
+            }
+        }
         out.sort_by_key(|m| (m.log_time, m.sequence));
         Ok(out)
     }
@@ -164,49 +191,109 @@ impl Recording {
             let hi = self.linear.partition_point(|m| m.log_time <= at);
             return Ok(self.linear[..hi].iter().rev().find(|m| &*m.topic == topic).cloned());
         }
-        let opts = IndexedReaderOptions::new()
-            .include_topics([topic.to_string()])
-            .ending_at(at)
-            .with_order(ReadOrder::ReverseLogTime);
-        Ok(self.read_indexed(opts, 1)?.pop())
-    }
-
-    fn read_indexed(
-        &mut self,
-        opts: IndexedReaderOptions,
-        limit: usize,
-    ) -> Result<Vec<RawMessage>, ReplayError> {
-        let summary = self.summary.as_ref().expect("indexed reads need the summary");
-        let mut reader = IndexedReader::new_with_options(summary, opts).map_err(format_error)?;
-        let mut out = Vec::new();
-        let mut buf = Vec::new();
-        while out.len() < limit {
-            let Some(event) = reader.next_event() else { break };
-            match event.map_err(format_error)? {
-                IndexedReadEvent::ReadChunkRequest { offset, length } => {
-                    buf.resize(length, 0);
-                    self.file
-                        .seek(SeekFrom::Start(offset))
-                        .and_then(|_| self.file.read_exact(&mut buf))
-                        .map_err(|e| ReplayError::Io(e.to_string()))?;
-                    reader.insert_chunk_record_data(offset, &buf).map_err(format_error)?;
+        let at = at.min(self.span.1);
+        let channels = self.channels(&[topic]);
+        let mut chunks: Vec<mcap::records::ChunkIndex> = self
+            .chunks_with(&channels)
+            .into_iter()
+            .filter(|c| c.message_start_time <= at)
+            .collect();
+        chunks.sort_by_key(|c| std::cmp::Reverse(c.message_end_time));
+        let mut best: Option<RawMessage> = None;
+        for c in chunks {
+            // The chunks left end before the best found so far.
+            if best.as_ref().is_some_and(|b| b.log_time > c.message_end_time) {
+                break;
+            }
+            let data = self.chunk_data(&c)?;
+            for rec in crate::chunk::records(&data) {
+                if let Record::Message { header, data } = rec
+                    && channels.contains(&header.channel_id)
+                    && header.log_time <= at
+                    && header.log_time >= self.span.0
+                    && (c.message_start_time..=c.message_end_time).contains(&header.log_time)
+                    && best.as_ref().is_none_or(|b| {
+                        (header.log_time, header.sequence) > (b.log_time, b.sequence)
+                    })
+                {
+                    best = Some(self.message(&header, &data));
                 }
-                IndexedReadEvent::Message { header, data } => out.push(RawMessage {
-                    log_time: header.log_time,
-                    sequence: header.sequence,
-                    topic: self
-                        .topics
-                        .get(&header.channel_id)
-                        .cloned()
-                        .unwrap_or_else(|| "".into()),
-                    data: data.to_vec(),
-                }),
             }
         }
-        Ok(out)
+        Ok(best)
     }
 
-    fn read_at(&mut self, offset: u64, length: u64) -> Result<Vec<u8>, ReplayError> {
+    /// The log time of the first message after `t` (a lower bound, read from the chunk
+    /// index without reading chunks); `u64::MAX` when there is none. Replay skips the gap.
+    pub fn next_after(&self, t: u64) -> u64 {
+        if t >= self.span.1 {
+            return u64::MAX;
+        }
+        let Some(s) = &self.summary else {
+            let i = self.linear.partition_point(|m| m.log_time <= t);
+            return self.linear.get(i).map_or(u64::MAX, |m| m.log_time);
+        };
+        let after = t.saturating_add(1);
+        s.chunk_indexes
+            .iter()
+            .filter(|c| c.message_end_time > t)
+            .map(|c| c.message_start_time.max(after))
+            .min()
+            .unwrap_or(u64::MAX)
+    }
+
+    /// The channels of `topics`.
+    fn channels(&self, topics: &[&str]) -> HashSet<u16> {
+        self.topics.iter().filter(|(_, t)| topics.contains(&&***t)).map(|(id, _)| *id).collect()
+    }
+
+    /// The summary's chunks that may hold messages on `channels` (by their message
+    /// indexes; every chunk where the writer wrote none), in file order.
+    fn chunks_with(&self, channels: &HashSet<u16>) -> Vec<mcap::records::ChunkIndex> {
+        let Some(s) = &self.summary else { return Vec::new() };
+        s.chunk_indexes
+            .iter()
+            .filter(|c| {
+                c.message_index_offsets.is_empty()
+                    || c.message_index_offsets.keys().any(|id| channels.contains(id))
+            })
+            .cloned()
+            .collect()
+    }
+
+    /// A chunk's records, decompressed.
+    fn chunk_data(&mut self, c: &mcap::records::ChunkIndex) -> Result<Vec<u8>, ReplayError> {
+        let damaged = |reason: String| ReplayError::Damaged {
+            record: "chunk",
+            offset: c.chunk_start_offset,
+            reason,
+        };
+        let at = c.compressed_data_offset().map_err(|e| damaged(e.to_string()))?;
+        let compressed = self.read_at("chunk", at, c.compressed_size)?;
+        crate::chunk::decompress(
+            c.chunk_start_offset,
+            &c.compression,
+            &compressed,
+            c.uncompressed_size,
+        )
+    }
+
+    fn message(&self, header: &mcap::records::MessageHeader, data: &[u8]) -> RawMessage {
+        RawMessage {
+            log_time: header.log_time,
+            sequence: header.sequence,
+            topic: self.topics.get(&header.channel_id).cloned().unwrap_or_else(|| "".into()),
+            data: data.to_vec(),
+        }
+    }
+
+    fn read_at(
+        &mut self,
+        record: &'static str,
+        offset: u64,
+        length: u64,
+    ) -> Result<Vec<u8>, ReplayError> {
+        crate::bounds::span(record, offset, length, self.size)?;
         let mut buf = vec![0; length as usize];
         self.file
             .seek(SeekFrom::Start(offset))
@@ -218,7 +305,7 @@ impl Recording {
     fn index_from_summary(&mut self, s: &mcap::Summary) -> Result<(), ReplayError> {
         self.topics = s.channels.iter().map(|(id, c)| (*id, Arc::from(c.topic.as_str()))).collect();
         for m in &s.metadata_indexes {
-            let buf = self.read_at(m.offset, m.length)?;
+            let buf = self.read_at("metadata", m.offset, m.length)?;
             if let Some(Ok(Record::Metadata(meta))) =
                 mcap::read::LinearReader::sans_magic(&buf).next()
             {
@@ -227,7 +314,7 @@ impl Recording {
         }
         for a in &s.attachment_indexes {
             if a.name == "bundle.mocub" {
-                let buf = self.read_at(a.offset, a.length)?;
+                let buf = self.read_at("attachment", a.offset, a.length)?;
                 if let Some(Ok(Record::Attachment { data, .. })) =
                     mcap::read::LinearReader::sans_magic(&buf).next()
                 {
@@ -235,14 +322,16 @@ impl Recording {
                 }
             }
         }
-        self.span = match &s.stats {
-            Some(st) => (st.message_start_time, st.message_end_time),
-            None => {
-                let lo = s.chunk_indexes.iter().map(|c| c.message_start_time).min();
-                let hi = s.chunk_indexes.iter().map(|c| c.message_end_time).max();
-                (lo.unwrap_or(0), hi.unwrap_or(0))
-            }
+        // What the chunk indexes and the statistics both say: one damaged field of either
+        // cannot stretch the trial.
+        let lo = s.chunk_indexes.iter().map(|c| c.message_start_time).min().unwrap_or(0);
+        let hi = s.chunk_indexes.iter().map(|c| c.message_end_time).max().unwrap_or(0);
+        let (lo, hi) = match &s.stats {
+            Some(st) => (lo.max(st.message_start_time), hi.min(st.message_end_time)),
+            None => (lo, hi),
         };
+        let (first, last) = crate::times::window(self.meta.start_ns, lo);
+        self.span = (lo.max(first), hi.min(last));
         Ok(())
     }
 
@@ -261,6 +350,9 @@ impl Recording {
         for rec in records {
             self.take_record(rec);
         }
+        let lo = self.linear.iter().map(|m| m.log_time).min().unwrap_or(0);
+        let (first, last) = crate::times::window(self.meta.start_ns, lo);
+        self.linear.retain(|m| (first..=last).contains(&m.log_time));
         self.linear.sort_by_key(|m| (m.log_time, m.sequence));
         self.span = match (self.linear.first(), self.linear.last()) {
             (Some(a), Some(b)) => (a.log_time, b.log_time),
@@ -279,9 +371,23 @@ impl Recording {
                 self.bundle = Some(data.into_owned());
             }
             Record::Chunk { header, data } => {
-                let Ok(inner) = mcap::read::ChunkReader::new(header, &data) else { return };
-                for r in inner {
-                    let Ok(r) = r else { break };
+                // Offsets are not known here: 0 names none.
+                let Ok(inner) = crate::chunk::decompress(
+                    0,
+                    &header.compression,
+                    &data,
+                    header.uncompressed_size,
+                ) else {
+                    return;
+                };
+                let stated = header.message_start_time..=header.message_end_time;
+                for r in crate::chunk::records(&inner) {
+                    // A message outside its chunk's stated times is damaged: dropped.
+                    if let Record::Message { header: m, .. } = &r
+                        && !stated.contains(&m.log_time)
+                    {
+                        continue;
+                    }
                     self.take_record(r);
                 }
             }

@@ -20,9 +20,12 @@
 
 #![forbid(unsafe_code)]
 
+mod bounds;
+mod chunk;
 mod file;
 mod message;
 mod player;
+mod times;
 mod value;
 mod world;
 
@@ -31,6 +34,7 @@ pub use message::{
     Frame, ObjectChange, PropertyChange, Snapshot, SnapshotObject, Unit, ValueEntry, values,
 };
 pub use player::Player;
+pub use times::{BEFORE_START_NS, MAX_TRIAL_NS};
 pub use world::World;
 
 /// Topics replay reads.

@@ -271,14 +271,23 @@ impl Player {
         if to <= self.cursor {
             return Ok(());
         }
+        // How far each read reaches: doubled after a read that found nothing, so that a
+        // long gap (or a chunk whose stated times span one) takes a few reads, not one a
+        // second.
+        let mut reach = READ_AHEAD;
         loop {
             // What is ahead up to `loaded_to` is complete: a message read later has a later
             // log time than that, and so have its entries.
             let ready = |i: &Item| i.key().0 <= self.loaded_to;
             if self.loaded_to < to && !self.ahead.front().is_some_and(ready) {
-                let hi = self.loaded_to.saturating_add(READ_AHEAD);
+                // Nothing lies before the next message: a gap is skipped, not read a
+                // second at a time.
+                let next = self.rec.next_after(self.loaded_to);
+                self.loaded_to = self.loaded_to.max(next.saturating_sub(1));
+                let hi = self.loaded_to.saturating_add(reach);
                 let topics: Vec<&str> = self.topics.iter().map(|t| &**t).collect();
-                let msgs = self.rec.messages(self.loaded_to + 1, hi, &topics)?;
+                let msgs = self.rec.messages(self.loaded_to.saturating_add(1), hi, &topics)?;
+                reach = if msgs.is_empty() { reach.saturating_mul(2) } else { READ_AHEAD };
                 let mut items: Vec<Item> = self.ahead.drain(..).collect();
                 items.extend(expand(msgs));
                 items.sort_by_key(Item::key);

@@ -18,6 +18,9 @@ pub struct World {
     ds: DataServer,
     /// Recorded GUID → this server's.
     map: HashMap<u64, Guid>,
+    /// This server's objects in `map` (so that each lookup is one probe, not a pass over
+    /// `map`: 300,000 siblings rebuild in linear time).
+    taken: HashSet<Guid>,
     /// Recorded objects left out (the recorded display and everything below it).
     skipped: HashSet<u64>,
     /// The properties `/world/values` entries name, by id: (recorded object, name).
@@ -26,7 +29,13 @@ pub struct World {
 
 impl World {
     pub fn new(ds: &DataServer) -> World {
-        World { ds: ds.clone(), map: HashMap::new(), skipped: HashSet::new(), ids: HashMap::new() }
+        World {
+            ds: ds.clone(),
+            map: HashMap::new(),
+            taken: HashSet::new(),
+            skipped: HashSet::new(),
+            ids: HashMap::new(),
+        }
     }
 
     /// This server's object for a recorded GUID.
@@ -160,24 +169,35 @@ impl World {
             return None;
         };
         let found = self.ds.find_child(p, &info.name).ok().flatten();
-        let taken: HashSet<Guid> = self.map.values().copied().collect();
-        let g = match found.filter(|f| !taken.contains(f)) {
+        let g = match found.filter(|f| !self.taken.contains(f)) {
             Some(f) => f,
             // A listener, so that recorded frames can be sent on it again.
             None if &*info.kind == LISTENER_TYPE => self.ds.create_listener(p, &info.name).ok()?,
             None => self.ds.create_object_at(p, index, info.clone()).ok()?,
         };
-        self.map.insert(guid, g);
+        if let Some(old) = self.map.insert(guid, g) {
+            self.taken.remove(&old);
+        }
+        self.taken.insert(g);
         Some(g)
     }
 
     fn forget(&mut self, guid: u64) {
-        self.map.remove(&guid);
+        if let Some(g) = self.map.remove(&guid) {
+            self.taken.remove(&g);
+        }
         self.skipped.remove(&guid);
         // Descendants of a deleted object go with it; their entries are dropped when a
         // later keyframe or lookup finds them gone.
         let ds = &self.ds;
-        self.map.retain(|_, g| ds.exists(*g));
+        let taken = &mut self.taken;
+        self.map.retain(|_, g| {
+            let keep = ds.exists(*g);
+            if !keep {
+                taken.remove(g);
+            }
+            keep
+        });
     }
 
     /// Recorded GUIDs inside a value mapped to this server's (unknown ones kept).
