@@ -200,7 +200,11 @@ impl DataServer {
     }
 
     /// The method as published now, or why there is none.
-    fn resolve_method(&self, guid: Guid, name: PropName) -> Result<Arc<Method>, CallOutcome> {
+    pub(crate) fn resolve_method(
+        &self,
+        guid: Guid,
+        name: PropName,
+    ) -> Result<Arc<Method>, CallOutcome> {
         let o = self.object(guid).map_err(|_| CallOutcome::NoSuchObject)?;
         let os = o.state.read();
         if !os.alive {
@@ -271,7 +275,13 @@ fn queued_job(server: Weak<Inner>, planned: Arc<Method>, call: Call) -> crate::e
                 Ok(args) => {
                     let call = Call { object, method, args, responder };
                     let target = now.target(&ds.inner.pool);
-                    target.submit(queued_job(Arc::downgrade(&ds.inner), now, call));
+                    if target.same(&planned.target(&ds.inner.pool)) {
+                        // Already where it runs: now, in the order it was made (an ordered
+                        // method published again keeps its executor).
+                        run_handler(&ds.inner, &now, call);
+                    } else {
+                        target.submit(queued_job(Arc::downgrade(&ds.inner), now, call));
+                    }
                 }
             }
         }

@@ -254,6 +254,15 @@ pub(crate) enum Target {
 }
 
 impl Target {
+    /// Whether both run jobs in the same place (the same pool, or the same serial executor).
+    pub(crate) fn same(&self, other: &Target) -> bool {
+        match (self, other) {
+            (Target::Pool(a), Target::Pool(b)) => Arc::ptr_eq(a, b),
+            (Target::Serial(a), Target::Serial(b)) => Arc::ptr_eq(&a.inner, &b.inner),
+            _ => false,
+        }
+    }
+
     pub(crate) fn submit(&self, job: Job) {
         match self {
             Target::Pool(pool) => pool.submit(job),

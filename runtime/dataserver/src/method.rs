@@ -251,10 +251,6 @@ impl DataServer {
         executor: Option<Executor>,
         handler: Handler,
     ) -> Result<(), DsError> {
-        let executor = match executor {
-            None if spec.ordered => Some(self.serial_executor()),
-            e => e,
-        };
         let o = self.object(guid)?;
         let mut os = o.state.write();
         if !os.alive {
@@ -263,6 +259,18 @@ impl DataServer {
         if os.methods.contains_key(&spec.name) {
             return Err(DsError::MethodExists { object: obj_ref_of(guid, &os), method: spec.name });
         }
+        // An ordered method gets a serial executor of its own, the same one each time it is
+        // published again under that name: calls still queued for the earlier publication
+        // keep their place, before the calls made since.
+        let executor = match executor {
+            None if spec.ordered => Some(
+                os.ordered_executors
+                    .entry(spec.name)
+                    .or_insert_with(|| self.serial_executor())
+                    .clone(),
+            ),
+            e => e,
+        };
         os.methods.insert(spec.name, Arc::new(Method { spec, handler, executor }));
         Ok(())
     }

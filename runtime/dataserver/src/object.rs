@@ -22,6 +22,9 @@ pub(crate) struct ObjState {
     /// Properties in creation order (small objects dominate: a Vec beats a map below ~16).
     pub(crate) props: PropTable,
     pub(crate) methods: IdMap<PropName, Arc<Method>>,
+    /// The serial executor of each ordered method published without one, kept for its
+    /// next publication under the same name.
+    pub(crate) ordered_executors: IdMap<PropName, crate::executor::Executor>,
     pub(crate) prop_subs: Vec<Arc<Sub>>,
     pub(crate) child_subs: Vec<Arc<Sub>>,
 }
@@ -97,6 +100,7 @@ impl Object {
                 children: Vec::new(),
                 props: PropTable::default(),
                 methods: IdMap::default(),
+                ordered_executors: IdMap::default(),
                 prop_subs: Vec::new(),
                 child_subs: Vec::new(),
             }),

@@ -52,7 +52,9 @@ struct Receiver {
     method: PropName,
     overflow: Overflow,
     capacity: usize,
-    run_on: Target,
+    /// Where its messages are drained: the method's executor, followed when the method is
+    /// published again elsewhere.
+    run_on: Mutex<Target>,
     queue: Mutex<RecvQueue>,
     room: Condvar,
     /// The highest `dropped` count written to the association object: concurrent senders
@@ -194,7 +196,7 @@ impl DataServer {
             method,
             overflow,
             capacity: capacity.max(1),
-            run_on,
+            run_on: Mutex::new(run_on),
             queue: Mutex::default(),
             room: Condvar::new(),
             published: Mutex::new(0),
@@ -253,7 +255,9 @@ impl DataServer {
                 q.scheduled = true;
                 let ds = self.clone();
                 let r2 = r.clone();
-                r.run_on.submit(Box::new(move || ds.drain_receiver(r2)));
+                drop(q);
+                self.drain_target(&r2).submit(Box::new(move || ds.drain_receiver(r2)));
+                q = r.queue.lock();
             }
             drop(q);
             if let Some(n) = dropped {
@@ -270,8 +274,33 @@ impl DataServer {
         }
     }
 
+    /// Where `r`'s messages are drained now: its method's executor as published now (it
+    /// may have been published again elsewhere since `join`); whether that moved.
+    fn follow_method(&self, r: &Receiver) -> (bool, Target) {
+        let now = self.resolve_method(r.target, r.method).map(|m| m.target(&self.inner.pool));
+        let mut run_on = r.run_on.lock();
+        match now {
+            Ok(now) if !now.same(&run_on) => {
+                *run_on = now.clone();
+                (true, now)
+            }
+            _ => (false, run_on.clone()),
+        }
+    }
+
+    fn drain_target(&self, r: &Receiver) -> Target {
+        self.follow_method(r).1
+    }
+
     fn drain_receiver(&self, r: Arc<Receiver>) {
         loop {
+            // The method published again on another executor: drain there from now on.
+            let (moved, now) = self.follow_method(&r);
+            if moved {
+                let (ds, r2) = (self.clone(), r.clone());
+                now.submit(Box::new(move || ds.drain_receiver(r2)));
+                return;
+            }
             let msg = {
                 let mut q = r.queue.lock();
                 match q.buf.pop_front() {

@@ -204,3 +204,30 @@ fn a_manual_clock_moved_as_far_as_an_instant_goes_still_tells_the_time_of_day() 
     // The feed stamps in nanoseconds since the epoch (u64): it saturates there, sooner.
     assert!(got[0].wall <= last.wall && last.wall <= after, "the feed's stamps went back");
 }
+
+#[test]
+fn one_manual_clock_shared_by_two_servers_fires_the_due_jobs_of_both() {
+    let clock = ManualClock::new();
+    let a = DataServer::with_clock(Config::default(), Arc::new(clock.clone()));
+    let b = DataServer::with_clock(Config::default(), Arc::new(clock.clone()));
+    let fired = Arc::new(std::sync::Mutex::new(Vec::new()));
+    for (ds, name, after) in [(&a, "a1", 10), (&b, "b1", 10), (&a, "a2", 30), (&b, "b2", 30)] {
+        let f = fired.clone();
+        ds.run_after(ms(after), None, move || f.lock().unwrap().push(name));
+    }
+    // `advance` fires what fell due on every server built on the clock.
+    clock.advance(ms(10));
+    a.quiesce();
+    b.quiesce();
+    let mut got = std::mem::take(&mut *fired.lock().unwrap());
+    got.sort();
+    assert_eq!(got, ["a1", "b1"]);
+    // `advance_settled` steps one server's jobs; the other's, due by then, fire no later
+    // than its `quiesce` (or the clock's next `advance`).
+    a.advance_settled(&clock, a.now() + ms(20));
+    assert!(fired.lock().unwrap().contains(&"a2"));
+    b.quiesce();
+    let mut got = std::mem::take(&mut *fired.lock().unwrap());
+    got.sort();
+    assert_eq!(got, ["a2", "b2"]);
+}

@@ -213,6 +213,37 @@ fn periodic_work_rearms_a_delayed_call_without_a_thread_of_its_own() {
 }
 
 #[test]
+fn an_ordered_method_published_again_keeps_the_order_of_calls_made_before_and_after() {
+    let ds = DataServer::default();
+    let v = ds.create_object(Guid::ROOT, ObjectInfo::new("window", "window")).unwrap();
+    let spec = MethodSpec::new("key").param(ParamSpec::new("n", ValueKind::Int)).ordered();
+    let (entered_tx, entered) = crossbeam_channel::bounded::<()>(1);
+    let (release_tx, release) = crossbeam_channel::bounded::<()>(1);
+    let release = Mutex::new(release);
+    ds.publish_method_fn(v, spec.clone(), move |_| {
+        let _ = entered_tx.send(());
+        let _ = release.lock().unwrap().recv_timeout(Duration::from_secs(20));
+        CallOutcome::Accepted(vec![])
+    })
+    .unwrap();
+    ds.call(v, "key", vec![Value::Int(1)], None, |_| {});
+    entered.recv_timeout(Duration::from_secs(20)).expect("the first call runs");
+    ds.call(v, "key", vec![Value::Int(2)], None, |_| {}); // queued behind the first
+    ds.unpublish_method(v, "key").unwrap();
+    let seen = Arc::new(Mutex::new(Vec::new()));
+    let s = seen.clone();
+    ds.publish_method_fn(v, spec, move |args| {
+        s.lock().unwrap().push(args[0].as_i64().unwrap());
+        CallOutcome::Accepted(vec![])
+    })
+    .unwrap();
+    ds.call(v, "key", vec![Value::Int(3)], None, |_| {});
+    release_tx.send(()).unwrap();
+    ds.quiesce();
+    assert_eq!(*seen.lock().unwrap(), [2, 3], "a call made later overtook one made earlier");
+}
+
+#[test]
 fn an_ordered_methods_queued_calls_run_one_at_a_time_in_the_order_they_were_made() {
     // Pointer and key input: a release that overtook its press would be another gesture.
     // The first call blocks until every other one is queued; on the bare pool the others

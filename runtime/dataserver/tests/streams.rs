@@ -103,3 +103,33 @@ fn a_deleted_receiver_leaves_its_listeners() {
     assert!(ds.receivers(cam).unwrap().is_empty());
     assert!(matches!(ds.send(a, vec![]), Err(DsError::NotAListener { .. })));
 }
+
+#[test]
+fn a_receiver_published_again_on_another_executor_gets_its_messages_there() {
+    let ds = DataServer::default();
+    let (old, new) = (ds.serial_executor(), ds.serial_executor());
+    let o = ds.create_object(Guid::ROOT, ObjectInfo::new("w", "window")).unwrap();
+    let spec = MethodSpec::new("frame").param(ParamSpec::new("n", ValueKind::Int));
+    ds.publish_method_on(&old, o, spec.clone(), |call| {
+        call.responder.accept(vec![]);
+    })
+    .unwrap();
+    let cam = ds.create_listener(Guid::ROOT, "cam").unwrap();
+    ds.join(cam, o, "frame", Overflow::Block, 4).unwrap();
+    ds.unpublish_method(o, "frame").unwrap();
+    let (got_tx, got) = crossbeam_channel::unbounded();
+    ds.publish_method_on(&new, o, spec, move |call| {
+        let _ = got_tx.send(call.args[0].clone());
+        call.responder.accept(vec![]);
+    })
+    .unwrap();
+    // The old executor is busy until the message has arrived: it must not be needed.
+    let (open_tx, open) = crossbeam_channel::bounded::<()>(1);
+    old.spawn(move || {
+        let _ = open.recv_timeout(std::time::Duration::from_secs(20));
+    });
+    ds.send(cam, vec![Value::Int(7)]).unwrap();
+    let n = got.recv_timeout(std::time::Duration::from_secs(20));
+    let _ = open_tx.send(());
+    assert_eq!(n.ok(), Some(Value::Int(7)), "the message waited for the old executor");
+}
