@@ -77,3 +77,29 @@ pub fn summary(s: &mcap::Summary, size: u64) -> Result<(), ReplayError> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_length_past_the_end_of_the_file_is_refused_naming_the_record_and_its_offset() {
+        let e = span("metadata", 100, 1 << 40, 4096).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "damaged recording: the metadata at byte 100 says it is 1099511627776 bytes, \
+             past the end of the 4096-byte file"
+        );
+        assert!(span("attachment", u64::MAX, 2, 4096).is_err(), "offset + length overflows");
+        assert!(span("chunk", 96, 4000, 4096).is_ok());
+    }
+
+    #[test]
+    fn a_chunk_that_claims_more_than_it_can_decompress_to_is_refused() {
+        assert!(chunk(8, "lz4", 1000, 1000 * MAX_EXPANSION, 1000).is_ok());
+        assert!(chunk(8, "zstd", 1000, 1 << 63, 1000).is_err());
+        assert!(chunk(8, "", 1000, 1001, 1000).is_err(), "uncompressed sizes must agree");
+        let e = chunk(8, "lz4", 5000, 10, 1000).unwrap_err();
+        assert!(matches!(e, ReplayError::Damaged { record: "chunk", offset: 8, .. }), "{e}");
+    }
+}
