@@ -96,3 +96,27 @@ fn a_screen_size_beyond_the_limit_is_held_to_it() {
     assert_eq!(d.window_manager().size(), (side, 4));
     assert_eq!(d.window_manager().layer_size(w), Some((side, 4)));
 }
+
+#[test]
+fn a_damage_repaint_of_a_window_hanging_off_the_screen_lands_on_its_visible_part() {
+    let (ds, mut d) = world(320, 200);
+    let w = window(&ds, &d, "off", "x", 0, Rect::new(-90.0, -95.0, 300.0, 200.0));
+    let mark = std::sync::Arc::new(parking_lot::Mutex::new(RED));
+    let m2 = mark.clone();
+    claim_window(&ds, w, move |c, _| {
+        c.clear(BLUE);
+        c.fill_rect(Rect::new(100.0, 100.0, 20.0, 20.0), *m2.lock());
+    })
+    .unwrap();
+    frame(&ds, &mut d);
+    *mark.lock() = Color::rgb(0, 255, 0);
+    // Half of the damage is off the screen (window-local y 90..95 is above it).
+    invalidate_rect(&ds, w, Rect::new(95.0, 90.0, 30.0, 30.0)).unwrap();
+    let st = frame(&ds, &mut d);
+    assert_eq!(&*st.partial, &["off".into()] as &[std::sync::Arc<str>]);
+    assert_eq!(st.damage, IRect::new(5, 0, 30, 25));
+    let f = d.read_frame();
+    assert_eq!(pixel(&f, 15, 10), [0, 255, 0, 255]);
+    assert_eq!(pixel(&f, 7, 2), [0, 0, 255, 255]);
+    assert_eq!(pixel(&f, 40, 10), [0, 0, 255, 255], "outside the damage: untouched");
+}

@@ -198,6 +198,21 @@ fn a_broken_save_keeps_the_last_good_layout_and_raises_the_banner_until_fixed() 
 }
 
 #[test]
+fn a_save_with_a_window_beyond_the_display_limits_is_refused_and_the_trial_display_stays() {
+    let mut r = rig(&layout_text("#ff0000", 100, ""));
+    assert_eq!(r.frame(), (255, 0, 0));
+    r.reloader.watch().unwrap();
+    let huge = layout_text("#00ff00", 100, "")
+        + "window huge { layer 20  rect 0 0 100000000 100000000 }\n";
+    std::fs::write(&r.path, &huge).unwrap();
+    r.wait("the banner", |r| r.banner_active());
+    let d = r.ds.resolve(&["operator", "diagnostics"]).unwrap();
+    let shown = r.ds.get(d, "text").unwrap().to_string();
+    assert!(shown.contains("hud.mocu:8:34: 100000000 px is beyond the display's limit"), "{shown}");
+    assert_eq!(r.frame(), (255, 0, 0), "the last good layout stays on screen");
+}
+
+#[test]
 fn a_remote_tool_can_ask_for_a_reload_through_the_dataserver() {
     let mut r = rig(&layout_text("#ff0000", 100, ""));
     std::fs::write(&r.path, layout_text("#0000ff", 100, "")).unwrap();
