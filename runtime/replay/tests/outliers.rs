@@ -2,65 +2,39 @@
 //! a replay endless: a message outside its chunk's stated time range is dropped, and a trial
 //! lasts at most `MAX_TRIAL` from its start (docs/recording.md, "Damaged recordings").
 
-use mcap::records::MessageHeader;
-use mocu_replay::{BEFORE_START_NS, MAX_TRIAL_NS, Player};
-use std::collections::BTreeMap;
-use std::path::Path;
+mod support;
 
-const START_NS: u64 = 1_763_875_200_000_000_000;
+use mocu_replay::{BEFORE_START_NS, MAX_TRIAL_NS, Player};
+use std::path::Path;
+use support::{Format1, START_NS};
 
 /// usv0.speed set to 1.0 at one second, then `outlier` sets it to 9.0 at `outlier_at`.
 fn write(path: &Path, outlier_at: u64, summary: bool) {
-    let f = std::fs::File::create(path).unwrap();
-    let opts = mcap::WriteOptions::new().compression(None).profile("mocu");
-    let mut w = opts.create(std::io::BufWriter::new(f)).unwrap();
-    let meta = BTreeMap::from([
-        ("format".to_string(), "1".to_string()),
-        ("start_ns".to_string(), START_NS.to_string()),
-    ]);
-    w.write_metadata(&mcap::records::Metadata { name: "mocu".into(), metadata: meta }).unwrap();
-    let none = BTreeMap::new();
-    let s = w.add_schema("mocu.ObjectChange", "jsonschema", b"{}").unwrap();
-    let objects = w.add_channel(s, "/world/object", "json", &none).unwrap();
-    let props = w.add_channel(s, "/world/property", "json", &none).unwrap();
-    let mut seq = 0;
-    let mut put = |w: &mut mcap::Writer<_>, channel_id, log_time: u64, data: &str| {
-        seq += 1;
-        let h = MessageHeader { channel_id, sequence: seq, log_time, publish_time: log_time };
-        w.write_to_known_channel(&h, data.as_bytes()).unwrap();
-    };
+    let mut w = Format1::create(path);
+    let (objects, props) = (w.objects, w.props);
+    let mut put = |channel, log_time, data: &str| w.put(channel, log_time, data);
     put(
-        &mut w,
         objects,
         START_NS,
         r#"{"op":"created","guid":2,"parent":1,"index":0,"name":"vehicles","type":"vehicles"}"#,
     );
     put(
-        &mut w,
         objects,
         START_NS,
         r#"{"op":"created","guid":3,"parent":2,"index":0,"name":"usv0","type":"vehicle"}"#,
     );
     put(
-        &mut w,
         props,
         START_NS,
         r#"{"op":"created","object":3,"name":"speed","kind":"float","value":0.0}"#,
     );
     put(
-        &mut w,
         props,
         START_NS + 1_000_000_000,
         r#"{"op":"set","object":3,"name":"speed","kind":"float","value":1.0}"#,
     );
-    put(
-        &mut w,
-        props,
-        outlier_at,
-        r#"{"op":"set","object":3,"name":"speed","kind":"float","value":9.0}"#,
-    );
-    w.finish().unwrap();
-    drop(w);
+    put(props, outlier_at, r#"{"op":"set","object":3,"name":"speed","kind":"float","value":9.0}"#);
+    w.finish();
     if !summary {
         // As a killed recorder leaves it: the data only, read linearly.
         let bytes = std::fs::read(path).unwrap();

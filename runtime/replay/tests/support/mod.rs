@@ -212,3 +212,41 @@ fn snapshot(i: u64, s: Synthetic, seq: u64) -> String {
     }
     format!(r#"{{"seq":{seq},"objects":[{}]}}"#, objects.join(","))
 }
+
+/// A recording of format 1, written message by message: uncompressed chunks, the `mocu`
+/// metadata starting at [`START_NS`], and its `/world/object` and `/world/property` channels.
+pub struct Format1 {
+    pub w: mcap::Writer<BufWriter<std::fs::File>>,
+    pub objects: u16,
+    pub props: u16,
+    seq: u32,
+}
+
+impl Format1 {
+    pub fn create(path: &Path) -> Format1 {
+        let f = std::fs::File::create(path).unwrap();
+        let opts = mcap::WriteOptions::new().compression(None).profile("mocu");
+        let mut w = opts.create(BufWriter::new(f)).unwrap();
+        let meta = BTreeMap::from([
+            ("format".to_string(), "1".to_string()),
+            ("start_ns".to_string(), START_NS.to_string()),
+        ]);
+        w.write_metadata(&mcap::records::Metadata { name: "mocu".into(), metadata: meta }).unwrap();
+        let none = BTreeMap::new();
+        let s = w.add_schema("mocu.ObjectChange", "jsonschema", b"{}").unwrap();
+        let objects = w.add_channel(s, "/world/object", "json", &none).unwrap();
+        let props = w.add_channel(s, "/world/property", "json", &none).unwrap();
+        Format1 { w, objects, props, seq: 0 }
+    }
+
+    /// One message on `channel_id` at `log_time`.
+    pub fn put(&mut self, channel_id: u16, log_time: u64, data: &str) {
+        self.seq += 1;
+        let h = MessageHeader { channel_id, sequence: self.seq, log_time, publish_time: log_time };
+        self.w.write_to_known_channel(&h, data.as_bytes()).unwrap();
+    }
+
+    pub fn finish(mut self) {
+        self.w.finish().unwrap();
+    }
+}
