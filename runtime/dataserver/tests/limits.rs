@@ -45,14 +45,7 @@ fn nan_written_over_nan_is_no_change_whatever_its_payload_or_sign() {
     ];
     ds.set(o, "x", Value::Float(nans[0])).unwrap();
     ds.set(o, "l", Value::list(vec![Value::Float(nans[0])])).unwrap();
-    let changes = Arc::new(AtomicUsize::new(0));
-    let c = changes.clone();
-    ds.subscribe(Topic::properties(o), move |n| {
-        if n.kind == Kind::Changed {
-            c.fetch_add(1, Ordering::SeqCst);
-        }
-    })
-    .unwrap();
+    let changes = count_changes(&ds, o);
     for nan in nans {
         ds.set(o, "x", Value::Float(nan)).unwrap();
         ds.set(o, "l", Value::list(vec![Value::Float(nan)])).unwrap();
@@ -71,14 +64,7 @@ fn a_set_is_unchanged_by_nans_that_differ_only_in_payload_or_sign() {
     let f = |x: f64| Value::Float(x);
     let one_nan = f64::from_bits(0x7ff8_0000_0000_0001);
     ds.set(o, "s", Value::set(vec![f(1.0), f(f64::NAN)])).unwrap();
-    let changes = Arc::new(AtomicUsize::new(0));
-    let c = changes.clone();
-    ds.subscribe(Topic::properties(o), move |n| {
-        if n.kind == Kind::Changed {
-            c.fetch_add(1, Ordering::SeqCst);
-        }
-    })
-    .unwrap();
+    let changes = count_changes(&ds, o);
     // Any NaN is the same element of a set, wherever its sign sorts it and however many.
     for same in [
         vec![f(-f64::NAN), f(1.0)],
@@ -168,4 +154,17 @@ fn a_sender_blocked_on_a_full_queue_is_released_with_an_error_when_the_receiver_
     ds.quiesce();
     assert!(!ds.exists(assoc), "the association goes with its receiver");
     assert_eq!(ds.receivers(l).unwrap(), Vec::<Guid>::new());
+}
+
+/// How many `Changed` notifications `o`'s properties have had since now.
+fn count_changes(ds: &DataServer, o: Guid) -> Arc<AtomicUsize> {
+    let changes = Arc::new(AtomicUsize::new(0));
+    let c = changes.clone();
+    ds.subscribe(Topic::properties(o), move |n| {
+        if n.kind == Kind::Changed {
+            c.fetch_add(1, Ordering::SeqCst);
+        }
+    })
+    .unwrap();
+    changes
 }
