@@ -33,6 +33,16 @@ pub fn for_each_file(spec: &mut ModuleSpec, mut f: impl FnMut(&mut String, bool)
     }
 }
 
+/// Makes the files `spec` names (a script's `file`, the map's `overlays` and `tiles`) paths
+/// from `dir`, as `mocu run` and `mocu check` both read them; absolute paths stay.
+pub fn resolve_from(spec: &mut ModuleSpec, dir: &std::path::Path) {
+    for_each_file(spec, |f, _| {
+        if !f.is_empty() {
+            *f = dir.join(&*f).to_string_lossy().into_owned();
+        }
+    });
+}
+
 /// Reads the files the profile at `profile_path` names into `bundle`. A file that cannot be
 /// read is an error naming the module and the file (the check passed, so it is rare).
 pub fn collect(profile_path: &Path, bundle: &mut mocu_language::Bundle) -> Result<(), String> {

@@ -123,11 +123,7 @@ pub fn load_target(path: &Path) -> Result<Target, TargetError> {
             // docs/scripting.md).
             let dir = profile_dir(path);
             for s in &mut specs {
-                crate::bundle_files::for_each_file(s, |f, _| {
-                    if !f.is_empty() {
-                        *f = dir.join(&*f).to_string_lossy().into_owned();
-                    }
-                });
+                crate::bundle_files::resolve_from(s, &dir);
             }
             Some(specs)
         }
@@ -394,19 +390,13 @@ pub fn main(args: RunArgs) -> ExitCode {
 /// The modules that failed to start and are not marked `optional = true`: the run goes on
 /// (the operator sees what is there), and exits 1 at its end.
 fn required_failures(specs: &[ModuleSpec], errors: &[mocu_host::StartError]) -> Vec<String> {
-    use mocu_host::StartError::*;
     errors
         .iter()
-        .map(|e| match e {
-            UnknownKind { module, .. }
-            | DuplicateName { module }
-            | Failed { module, .. }
-            | Panicked { module, .. } => module,
-        })
+        .map(mocu_host::StartError::module)
         .filter(|m| {
             let optional = specs
                 .iter()
-                .find(|s| &s.name == *m)
+                .find(|s| s.name == *m)
                 .and_then(|s| s.settings.get("optional"))
                 .and_then(toml::Value::as_bool);
             optional != Some(true)

@@ -28,11 +28,7 @@ pub(crate) fn check(profile: &str, text: &str, sources: &mut SourceMap, diags: &
         if spec.settings.get("enabled").and_then(toml::Value::as_bool) == Some(false) {
             continue;
         }
-        crate::bundle_files::for_each_file(spec, |f, _| {
-            if !f.is_empty() {
-                *f = dir.join(&*f).to_string_lossy().into_owned();
-            }
-        });
+        crate::bundle_files::resolve_from(spec, dir);
         let why = match registry.make(spec) {
             Ok(_) => continue,
             // The profile pass names unknown kinds itself (with the known ones).

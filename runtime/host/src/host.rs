@@ -53,15 +53,30 @@ impl Registry {
     /// checked by the module's own factory, as `mocu check` does for a profile and the host
     /// does before `start`.
     pub fn make(&self, spec: &ModuleSpec) -> Result<Box<dyn Module>, StartError> {
+        let Some(factory) = self.kinds.get(&spec.kind) else { return Err(self.unknown(spec)) };
         let module = spec.name.clone();
-        let Some(factory) = self.kinds.get(&spec.kind) else {
-            let known = self.kinds().map(str::to_string).collect();
-            return Err(StartError::UnknownKind { module, kind: spec.kind.clone(), known });
-        };
         match catch_unwind(AssertUnwindSafe(|| factory(spec))) {
             Ok(Ok(m)) => Ok(m),
             Ok(Err(reason)) => Err(StartError::Failed { module, reason }),
             Err(p) => Err(StartError::Panicked { module, message: panic_message(&*p) }),
+        }
+    }
+
+    /// The error for a spec whose kind is not registered, listing the kinds that are.
+    fn unknown(&self, spec: &ModuleSpec) -> StartError {
+        let known = self.kinds().map(str::to_string).collect();
+        StartError::UnknownKind { module: spec.name.clone(), kind: spec.kind.clone(), known }
+    }
+}
+
+impl StartError {
+    /// The module that did not start.
+    pub fn module(&self) -> &str {
+        match self {
+            StartError::UnknownKind { module, .. }
+            | StartError::DuplicateName { module }
+            | StartError::Failed { module, .. }
+            | StartError::Panicked { module, .. } => module,
         }
     }
 }
@@ -165,8 +180,7 @@ impl ModuleHost {
             return Err(StartError::DuplicateName { module });
         }
         if !self.registry.kinds.contains_key(&spec.kind) {
-            let known = self.registry.kinds().map(str::to_string).collect();
-            return Err(StartError::UnknownKind { module, kind: spec.kind.clone(), known });
+            return Err(self.registry.unknown(spec));
         }
         let status = crate::world::ensure_path(&self.ds, &["modules", &spec.name], "module")
             .map_err(|e| StartError::Failed { module: module.clone(), reason: e.to_string() })?;
